@@ -1,0 +1,53 @@
+// kincal: the calibration tool. Thin front end over kincal::core; see `kincal --help`.
+#include <exception>
+#include <iostream>
+#include <map>
+
+#include "commands.h"
+#include "kincal/effect.h"
+#include "kincal/estimation/filter.h"
+#include "kincal/model.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"kincal: kinematic calibration of mobile robots from camera poses"};
+  app.require_subcommand(1);
+  std::map<CLI::App*, kincal::app::Command> commands;
+  auto* models = app.add_subcommand("models", "list kinematic models, effects and filters");
+  commands[models] = [] {
+    for (const auto& name : kincal::ModelRegistry::Instance().Names()) {
+      auto m = kincal::MakeModel(name);
+      std::cout << "model " << name << ": " << m->description() << "\n  params:";
+      for (const auto& p : m->params()) std::cout << " " << p.name << " [" << p.unit << "]";
+      std::cout << "\n  controls:";
+      for (const auto& c : m->controls()) std::cout << " " << c.name << " [" << c.unit << "]";
+      std::cout << "\n";
+    }
+    for (const auto& name : kincal::EffectRegistry::Instance().Names()) {
+      auto e = kincal::EffectRegistry::Instance().Create(name);
+      std::cout << "effect " << name << " (" << kincal::ToString(e->stage())
+                << "): " << e->description() << "\n  params:";
+      for (const auto& p : e->params()) std::cout << " " << p.name << " [" << p.unit << "]";
+      std::cout << "\n";
+    }
+    std::cout << "filters:";
+    for (const auto& name : kincal::FilterRegistry::Instance().Names()) std::cout << " " << name;
+    std::cout << "\n";
+    return 0;
+  };
+  auto* reproduce = app.add_subcommand("reproduce", "reproduce a published experiment");
+  commands[reproduce] = kincal::app::AddReproduce(*reproduce);
+  auto* simulate = app.add_subcommand("simulate", "simulate a robot and calibrate it online");
+  commands[simulate] = kincal::app::AddSimulate(*simulate);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    for (auto* sub : app.get_subcommands()) return commands.at(sub)();
+  } catch (const std::exception& e) {
+    std::cerr << "kincal: error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,36 @@
+# Debian's liblcm-dev 1.3.1 ships no CMake helpers, so lcm-gen is driven here directly.
+# kincal_lcm_types(<target> <file.lcm>...) generates C++ headers and the Python package
+# into the build tree and defines the INTERFACE target kincal::lcmtypes.
+find_program(LCM_GEN lcm-gen REQUIRED)
+
+function(kincal_lcm_types target)
+  set(cpp_dir ${CMAKE_BINARY_DIR}/lcmgen/cpp)
+  set(py_dir ${CMAKE_BINARY_DIR}/lcmgen/python)
+  set(outputs)
+  set(sources)
+  foreach(lcm_file ${ARGN})
+    get_filename_component(type_name ${lcm_file} NAME_WE)
+    set(src ${CMAKE_CURRENT_SOURCE_DIR}/${lcm_file})
+    list(APPEND sources ${src})
+    set(hpp ${cpp_dir}/kincal/${type_name}.hpp)
+    set(py ${py_dir}/kincal/${type_name}.py)
+    add_custom_command(
+      OUTPUT ${hpp} ${py}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${cpp_dir} ${py_dir}
+      COMMAND ${LCM_GEN} --cpp --cpp-hpath ${cpp_dir} ${src}
+      COMMAND ${LCM_GEN} --python --ppath ${py_dir} ${src}
+      DEPENDS ${src}
+      COMMENT "lcm-gen ${type_name}"
+      VERBATIM)
+    list(APPEND outputs ${hpp} ${py})
+  endforeach()
+  add_custom_target(${target}_gen DEPENDS ${outputs})
+  add_library(${target} INTERFACE)
+  add_dependencies(${target} ${target}_gen)
+  target_include_directories(${target} SYSTEM INTERFACE ${cpp_dir})
+  target_link_libraries(${target} INTERFACE PkgConfig::LCM)
+  add_library(kincal::lcmtypes ALIAS ${target})
+  install(DIRECTORY ${cpp_dir}/kincal DESTINATION include/kincal/lcmtypes)
+  install(DIRECTORY ${py_dir}/kincal DESTINATION lib/python3/dist-packages/kincal_lcm)
+  install(FILES ${sources} DESTINATION share/kincal/lcm)
+endfunction()

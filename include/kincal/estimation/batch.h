@@ -1,0 +1,77 @@
+// Batch maximum-likelihood calibration with Ceres, by multiple shooting.
+//
+// The recording is cut into segments (experiments, or pieces of a long run). Each
+// segment has a free start pose at the time of its first measurement; the model is
+// propagated open-loop through the control history from there, and every pose
+// measurement contributes its whitened residual R^-1/2 (z - h(x(t))), heading wrapped.
+// All segments share one parameter block (model + effect parameters). Effect states
+// start at steady state for the controls in force at the segment start.
+//
+// An optional Gaussian prior on the parameters makes the problem Bayesian (needed when
+// the design cannot identify every parameter, e.g. one constant-control experiment).
+// The same machinery evaluated at the true parameters without solving gives the
+// Cramer-Rao (or, with the prior, the Bayesian) bound of an experiment design.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "kincal/control_signal.h"
+#include "kincal/system.h"
+#include "kincal/time.h"
+
+namespace kincal {
+
+struct PoseMeasurement {
+  TimeNs t_ns = 0;                               // recording time base
+  Eigen::Vector3d z = Eigen::Vector3d::Zero();   // measured target pose (m, m, rad)
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // its covariance
+  int segment = 0;                               // shooting segment id (non-decreasing)
+};
+
+struct ParamPrior {
+  Eigen::VectorXd mean;        // over all System params
+  Eigen::MatrixXd covariance;  // positive definite
+};
+
+struct BatchOptions {
+  int max_iterations = 100;
+  // Huber loss on whitened residuals with this scale (0: plain least squares).
+  double huber_scale = 0.0;
+  std::optional<ParamPrior> prior;
+  bool compute_covariance = true;
+  int num_threads = 1;
+  bool IsValid(const System& sys, std::string* error) const;
+};
+
+struct BatchResult {
+  Eigen::VectorXd params;          // estimate over all System params
+  Eigen::MatrixXd covariance;      // their covariance (empty if not computed / singular)
+  std::vector<Eigen::Vector3d> segment_start;  // reference pose at each segment start
+  std::vector<TimeNs> segment_start_ns;
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  int iterations = 0;
+  bool converged = false;
+  bool covariance_ok = false;
+  std::string message;
+};
+
+// Fits the parameters. `params0` is the initial guess over all System params. Measurements
+// must be sorted by time within each segment.
+BatchResult FitBatch(const System& sys, const ControlSignal& controls,
+                     std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params0,
+                     const BatchOptions& options);
+
+// Covariance of the parameters implied by the design at the true parameters and true
+// segment start poses (the Cramer-Rao bound; Bayesian if options.prior is set). Nothing is
+// solved: only Jacobians are used, so measurement values are irrelevant.
+BatchResult BoundAt(const System& sys, const ControlSignal& controls,
+                    std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params_true,
+                    const std::vector<Eigen::Vector3d>& segment_start_true,
+                    const BatchOptions& options);
+
+}  // namespace kincal

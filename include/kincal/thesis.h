@@ -1,0 +1,80 @@
+// The thesis experiment (McNamee 2003, ch. 6) reproduced in simulation.
+//
+// Robot: differential drive, R_L = 31.0 mm, R_R = 31.3 mm, D = 148 mm. Camera: nadir,
+// 1.5 m above the floor, 320 px wide with a 52 deg horizontal field of view (f = 328 px),
+// frames at 6 Hz with capture stalls of up to 0.4 s. Target: four markers on an
+// 80 x 120 mm plate; centroid noise 0.02 px, propagated to planar pose noise. Controls:
+// the 99 constant wheel-rate vectors of Table 6-4. Each run lasts one full turn of the
+// true robot, but at least 20 nominal frame periods (the fastest runs turn in 0.66 s).
+// Estimators start from a guess with 5 % (1 sigma) error per parameter and a matching
+// prior covariance, never from the truth.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "kincal/simulator.h"
+
+namespace kincal {
+
+// Table 6-4: (omega_L, omega_R) in rad/s for experiments 1..99.
+extern const double kThesisControls[99][2];
+// Table 6-5: (R_L, R_R, D) in mm estimated by the thesis for experiments 1..99.
+extern const double kThesisEstimates[99][3];
+// Thesis robot (m).
+inline constexpr double kThesisRL = 0.0310, kThesisRR = 0.0313, kThesisD = 0.148;
+// NNDE the thesis reports (section 7.2), percent. It equals the NNDE of the mean of the
+// Table 6-5 estimates.
+inline constexpr double kThesisNndePercent = 0.466;
+
+struct ThesisOptions {
+  int runs = 99;          // experiments 1..runs of Table 6-4
+  uint64_t seed = 1;
+  int trials = 1;         // Monte-Carlo repetitions (figures are RMS over trials)
+  double guess_error = 0.05;
+  double centroid_sigma_px = 0.02;
+  double camera_height_m = 1.5;
+  double image_width_px = 320.0;
+  double hfov_rad = 52.0 * 3.14159265358979323846 / 180.0;
+  FrameTimingOptions timing{6.0, 0.4, 0.25, 0.0};
+  double min_frames = 20.0;
+  std::vector<std::string> filters = {"dd2", "ekf", "ukf"};
+  bool batch = true;
+  bool per_run = true;
+  bool IsValid(std::string* error) const;
+};
+
+struct ThesisResult {
+  int runs = 0;
+  int trials = 0;
+  int frames = 0;                 // pose measurements per trial
+  double duration_s = 0.0;        // total driving time per trial
+  Eigen::Matrix3d pose_cov;       // measurement covariance used
+  // Joint calibration over all runs: RMS NNDE (%) over trials, by estimator.
+  std::map<std::string, double> joint_nnde_percent;
+  // Bayesian Cramer-Rao bound of the joint design, as an RMS NNDE (%).
+  double joint_bound_nnde_percent = 0.0;
+  // Per-experiment calibration (one filter per run): mean NNDE (%) over runs and trials.
+  std::map<std::string, double> per_run_nnde_percent;
+  double per_run_bound_nnde_percent = 0.0;
+  // Thesis figures for comparison.
+  double thesis_nnde_percent = kThesisNndePercent;
+  double thesis_per_run_nnde_percent = 0.0;  // mean NNDE of Table 6-5 rows
+  // Last trial's joint estimates (m) and 1-sigma, by estimator.
+  std::map<std::string, Eigen::Vector3d> joint_estimate;
+  std::map<std::string, Eigen::Vector3d> joint_sigma;
+  // Fraction of parameter errors of the joint estimates inside 3 sigma, over trials.
+  std::map<std::string, double> joint_within_3sigma;
+};
+
+// NNDE = || (a_est - a_true) / a_true || (thesis eq. 7.2), as a fraction.
+double Nnde(const Eigen::VectorXd& est, const Eigen::VectorXd& truth);
+// Expected (RMS) NNDE of an estimator with covariance C: sqrt(trace(W C W)), W = diag(1/a).
+double ExpectedNnde(const Eigen::MatrixXd& C, const Eigen::VectorXd& truth);
+
+ThesisResult ReproduceThesis(const ThesisOptions& options);
+
+}  // namespace kincal

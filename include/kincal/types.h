@@ -1,0 +1,65 @@
+// Fixed capacities and Eigen aliases shared by the estimation core.
+//
+// Every vector and matrix on the per-step path is a dynamic-size Eigen type with a
+// compile-time maximum, so it lives on the stack: no heap allocation per filter step,
+// yet models with different state sizes share one implementation.
+#pragma once
+
+#include <ceres/jet.h>
+
+#include <Eigen/Dense>
+#include <string>
+
+namespace kincal {
+
+// Augmented state: pose (3) + model parameters + effect parameters + effect states.
+inline constexpr int kMaxState = 24;
+// Control channels of any model.
+inline constexpr int kMaxControls = 4;
+// Process-noise inputs: one per control channel + 3 additive pose terms.
+inline constexpr int kMaxNoise = kMaxControls + 3;
+// Measurement dimension (a planar pose is 3).
+inline constexpr int kMaxMeas = 6;
+// Derivative slots of the autodiff scalar: enough for state + noise, or for one batch
+// segment's start pose + all parameters.
+inline constexpr int kJetSize = kMaxState + kMaxNoise + 1;
+
+using Jet = ceres::Jet<double, kJetSize>;
+
+template <int MaxRows>
+using VecN = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxRows, 1>;
+template <int MaxRows, int MaxCols>
+using MatN = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, MaxRows, MaxCols>;
+
+using StateVec = VecN<kMaxState>;
+using StateMat = MatN<kMaxState, kMaxState>;
+using NoiseVec = VecN<kMaxNoise>;
+using NoiseMat = MatN<kMaxNoise, kMaxNoise>;
+using MeasVec = VecN<kMaxMeas>;
+using MeasMat = MatN<kMaxMeas, kMaxMeas>;
+using StateNoiseMat = MatN<kMaxState, kMaxNoise>;
+using MeasStateMat = MatN<kMaxMeas, kMaxState>;
+using StateMeasMat = MatN<kMaxState, kMaxMeas>;
+
+// Describes one scalar parameter of a model or effect.
+struct ParamInfo {
+  std::string name;      // interface name: CSV, LCM, --init
+  std::string unit;      // SI unit, e.g. "m", "rad", "s", "1"
+  double default_value;  // generic initial guess for an unknown robot
+  double default_sigma;  // 1-sigma of that guess, same unit
+};
+
+// Describes one control channel.
+struct ControlInfo {
+  std::string name;  // interface name
+  std::string unit;  // e.g. "rad/s", "m/s", "rad", "tick", "tick/s"
+};
+
+// Scalar part of double or Jet, for branching and indexing.
+inline double ScalarOf(double v) { return v; }
+template <typename T, int N>
+double ScalarOf(const ceres::Jet<T, N>& v) {
+  return v.a;
+}
+
+}  // namespace kincal

@@ -1,0 +1,87 @@
+#include "kincal/effect.h"
+
+#include <stdexcept>
+
+namespace kincal {
+
+std::string_view ToString(EffectStage s) {
+  switch (s) {
+    case EffectStage::kControlTiming:
+      return "control timing";
+    case EffectStage::kControlMap:
+      return "control map";
+    case EffectStage::kMotion:
+      return "motion";
+    case EffectStage::kMeasurement:
+      return "measurement";
+  }
+  return "?";
+}
+
+EffectRegistry& EffectRegistry::Instance() {
+  static EffectRegistry registry;
+  return registry;
+}
+
+bool EffectRegistry::Register(std::string name, Factory f) {
+  factories_.emplace_back(std::move(name), std::move(f));
+  return true;
+}
+
+std::unique_ptr<Effect> EffectRegistry::Create(std::string_view name) const {
+  for (const auto& [n, f] : factories_) {
+    if (n == name) return f();
+  }
+  return nullptr;
+}
+
+std::vector<std::string> EffectRegistry::Names() const {
+  std::vector<std::string> names;
+  for (const auto& entry : factories_) names.push_back(entry.first);
+  return names;
+}
+
+std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
+  auto e = EffectRegistry::Instance().Create(spec.name);
+  if (!e) {
+    std::string known;
+    for (const auto& n : EffectRegistry::Instance().Names()) {
+      known += (known.empty() ? "" : ", ") + n;
+    }
+    throw std::invalid_argument("unknown effect '" + spec.name + "' (known: " + known + ")");
+  }
+  if (!e->AppliesTo(model)) {
+    throw std::invalid_argument("effect '" + spec.name + "' does not apply to model '" +
+                                std::string(model.name()) + "'");
+  }
+  std::string error;
+  if (!e->Bind(model, spec.channels, &error)) {
+    throw std::invalid_argument("effect '" + spec.name + "': " + error);
+  }
+  return e;
+}
+
+EffectSpec ParseEffectSpec(std::string_view text) {
+  EffectSpec spec;
+  const auto open = text.find('[');
+  if (open == std::string_view::npos) {
+    spec.name = std::string(text);
+    return spec;
+  }
+  const auto close = text.find(']', open);
+  if (close == std::string_view::npos || close != text.size() - 1) {
+    throw std::invalid_argument("effect spec '" + std::string(text) +
+                                "': expected name or name[channel,...]");
+  }
+  spec.name = std::string(text.substr(0, open));
+  std::string_view list = text.substr(open + 1, close - open - 1);
+  while (!list.empty()) {
+    const auto comma = list.find(',');
+    spec.channels.emplace_back(list.substr(0, comma));
+    if (comma == std::string_view::npos) break;
+    list.remove_prefix(comma + 1);
+  }
+  return spec;
+}
+
+}  // namespace kincal

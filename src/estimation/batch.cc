@@ -1,0 +1,289 @@
+#include "kincal/estimation/batch.h"
+
+#include <ceres/ceres.h>
+
+#include <cmath>
+#include <memory>
+#include <stdexcept>
+
+#include "kincal/angles.h"
+
+namespace kincal {
+namespace {
+
+// Residuals of one shooting segment: 3 per measurement, whitened.
+// Parameter blocks: [0] reference pose at the segment start (x, y, theta),
+//                   [1] all System parameters.
+class SegmentCost final : public ceres::CostFunction {
+ public:
+  SegmentCost(const System& sys, const ControlSignal& u, double t0_s,
+              std::vector<const PoseMeasurement*> meas)
+      : sys_(sys), u_(u), t0_(t0_s), meas_(std::move(meas)) {
+    set_num_residuals(3 * static_cast<int>(meas_.size()));
+    mutable_parameter_block_sizes()->push_back(3);
+    mutable_parameter_block_sizes()->push_back(sys_.num_params());
+    for (const auto* m : meas_) {
+      Eigen::LLT<Eigen::Matrix3d> llt(m->R);
+      if (llt.info() != Eigen::Success) {
+        throw std::invalid_argument("measurement covariance is not positive definite");
+      }
+      // Whitening W with W^T W = R^-1: W = L^-1.
+      whiten_.push_back(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
+      times_.push_back(u_.ToSeconds(m->t_ns));
+    }
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const bool want_jac = jacobians != nullptr && (jacobians[0] != nullptr || jacobians[1] != nullptr);
+    if (!want_jac) return Run<double>(parameters, residuals, nullptr);
+    return Run<Jet>(parameters, residuals, jacobians);
+  }
+
+ private:
+  template <typename T>
+  bool Run(double const* const* parameters, double* residuals, double** jacobians) const {
+    const int np = sys_.num_params();
+    T x[kMaxState];
+    for (int i = 0; i < 3; ++i) x[i] = Seed<T>(parameters[0][i], i);
+    for (int i = 0; i < np; ++i) x[3 + i] = Seed<T>(parameters[1][i], 3 + i);
+    for (int i = sys_.state_offset(); i < sys_.state_dim(); ++i) x[i] = T(0.0);
+    sys_.InitEffectStates(x, u_, t0_);
+    double t = t0_;
+    for (size_t k = 0; k < meas_.size(); ++k) {
+      sys_.Propagate(x, x, t, times_[k], u_, static_cast<const T*>(nullptr));
+      t = std::max(t, times_[k]);
+      T z[3];
+      sys_.Measure(x, z);
+      const Eigen::Vector3d& zm = meas_[k]->z;
+      T e[3] = {T(zm.x()) - z[0], T(zm.y()) - z[1], T(zm.z()) - z[2]};
+      e[2] = WrapT(e[2]);
+      for (int r = 0; r < 3; ++r) {
+        const T res = whiten_[k](r, 0) * e[0] + whiten_[k](r, 1) * e[1] + whiten_[k](r, 2) * e[2];
+        const int row = 3 * static_cast<int>(k) + r;
+        residuals[row] = ScalarOf(res);
+        if constexpr (std::is_same_v<T, Jet>) {
+          if (jacobians[0] != nullptr) {
+            for (int j = 0; j < 3; ++j) jacobians[0][row * 3 + j] = res.v[j];
+          }
+          if (jacobians[1] != nullptr) {
+            for (int j = 0; j < np; ++j) jacobians[1][row * np + j] = res.v[3 + j];
+          }
+        }
+      }
+    }
+    return true;
+  }
+
+  template <typename T>
+  static T Seed(double value, int slot) {
+    if constexpr (std::is_same_v<T, Jet>) {
+      return Jet(value, slot);
+    } else {
+      (void)slot;
+      return value;
+    }
+  }
+  static double WrapT(double a) { return WrapAngle(a); }
+  static Jet WrapT(const Jet& a) { return WrapAngleJet(a); }
+
+  const System& sys_;
+  const ControlSignal& u_;
+  double t0_;
+  std::vector<const PoseMeasurement*> meas_;
+  std::vector<Eigen::Matrix3d> whiten_;
+  std::vector<double> times_;
+};
+
+// r = L^-1 (p - mean), with L L^T the prior covariance.
+class PriorCost final : public ceres::CostFunction {
+ public:
+  explicit PriorCost(const ParamPrior& prior) : mean_(prior.mean) {
+    const int n = static_cast<int>(mean_.size());
+    set_num_residuals(n);
+    mutable_parameter_block_sizes()->push_back(n);
+    Eigen::LLT<Eigen::MatrixXd> llt(prior.covariance);
+    if (llt.info() != Eigen::Success) {
+      throw std::invalid_argument("prior covariance is not positive definite");
+    }
+    whiten_ = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int n = static_cast<int>(mean_.size());
+    Eigen::Map<const Eigen::VectorXd> p(parameters[0], n);
+    Eigen::Map<Eigen::VectorXd>(residuals, n) = whiten_ * (p - mean_);
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+          jacobians[0], n, n) = whiten_;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::VectorXd mean_;
+  Eigen::MatrixXd whiten_;
+};
+
+struct Problem {
+  ceres::Problem problem;
+  std::vector<std::array<double, 3>> starts;
+  std::vector<TimeNs> start_ns;
+  Eigen::VectorXd params;
+};
+
+void Build(const System& sys, const ControlSignal& controls, std::span<const PoseMeasurement> meas,
+           const BatchOptions& options, Problem* pb) {
+  if (meas.empty()) throw std::invalid_argument("batch: no pose measurements");
+  // Group by segment, in order of appearance.
+  std::vector<std::vector<const PoseMeasurement*>> groups;
+  int current = meas.front().segment - 1;
+  for (const auto& m : meas) {
+    if (groups.empty() || m.segment != current) {
+      if (!groups.empty() && m.segment < current) {
+        throw std::invalid_argument("batch: segment ids must be non-decreasing");
+      }
+      groups.emplace_back();
+      current = m.segment;
+    }
+    if (!groups.back().empty() && m.t_ns < groups.back().back()->t_ns) {
+      throw std::invalid_argument("batch: measurement times go backwards within segment " +
+                                  std::to_string(m.segment));
+    }
+    groups.back().push_back(&m);
+  }
+  pb->starts.resize(groups.size());
+  pb->start_ns.resize(groups.size());
+  ceres::LossFunction* loss =
+      options.huber_scale > 0.0 ? new ceres::HuberLoss(options.huber_scale) : nullptr;
+  for (size_t g = 0; g < groups.size(); ++g) {
+    pb->start_ns[g] = groups[g].front()->t_ns;
+    const double t0 = controls.ToSeconds(pb->start_ns[g]);
+    auto* cost = new SegmentCost(sys, controls, t0, groups[g]);
+    pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
+  }
+  if (options.prior) pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
+}
+
+bool ComputeCovariance(const Problem& cpb, int np, Eigen::MatrixXd* cov) {
+  auto& pb = const_cast<Problem&>(cpb);
+  ceres::Covariance::Options copt;
+  const int total = 3 * static_cast<int>(pb.starts.size()) + np;
+  copt.algorithm_type = total <= 1500 ? ceres::DENSE_SVD : ceres::SPARSE_QR;
+  ceres::Covariance covariance(copt);
+  std::vector<std::pair<const double*, const double*>> blocks = {
+      {pb.params.data(), pb.params.data()}};
+  if (!covariance.Compute(blocks, &pb.problem)) return false;
+  cov->resize(np, np);
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> c(np, np);
+  covariance.GetCovarianceBlock(pb.params.data(), pb.params.data(), c.data());
+  *cov = c;
+  return cov->allFinite();
+}
+
+}  // namespace
+
+bool BatchOptions::IsValid(const System& sys, std::string* error) const {
+  if (max_iterations < 1) {
+    *error = "max_iterations must be >= 1";
+    return false;
+  }
+  if (huber_scale < 0.0) {
+    *error = "huber_scale must be >= 0";
+    return false;
+  }
+  if (prior) {
+    const int np = sys.num_params();
+    if (prior->mean.size() != np || prior->covariance.rows() != np ||
+        prior->covariance.cols() != np) {
+      *error = "prior must have " + std::to_string(np) + " parameters";
+      return false;
+    }
+  }
+  return true;
+}
+
+BatchResult FitBatch(const System& sys, const ControlSignal& controls,
+                     std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params0,
+                     const BatchOptions& options) {
+  std::string error;
+  if (!options.IsValid(sys, &error)) throw std::invalid_argument("batch: " + error);
+  if (params0.size() != sys.num_params()) {
+    throw std::invalid_argument("batch: initial guess has " + std::to_string(params0.size()) +
+                                " parameters, system has " + std::to_string(sys.num_params()));
+  }
+  Problem pb;
+  pb.params = params0;
+  Build(sys, controls, meas, options, &pb);
+  // Start poses from the first measurement of each segment at the initial parameters.
+  {
+    size_t g = 0;
+    int seg = meas.front().segment;
+    bool first = true;
+    for (const auto& m : meas) {
+      if (!first && m.segment != seg) ++g;
+      if (first || m.segment != seg) {
+        StateVec x = StateVec::Zero(sys.state_dim());
+        x.segment(3, sys.num_params()) = params0;
+        sys.SetPoseFromMeasurement(m.z.data(), x.data());
+        pb.starts[g] = {x[0], x[1], x[2]};
+        seg = m.segment;
+        first = false;
+      }
+    }
+  }
+  ceres::Solver::Options sopt;
+  sopt.linear_solver_type = ceres::DENSE_SCHUR;
+  sopt.max_num_iterations = options.max_iterations;
+  sopt.num_threads = options.num_threads;
+  sopt.function_tolerance = 1e-12;
+  sopt.parameter_tolerance = 1e-12;
+  sopt.gradient_tolerance = 1e-14;
+  sopt.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(sopt, &pb.problem, &summary);
+
+  BatchResult r;
+  r.params = pb.params;
+  r.initial_cost = summary.initial_cost;
+  r.final_cost = summary.final_cost;
+  r.iterations = static_cast<int>(summary.iterations.size());
+  r.converged = summary.termination_type == ceres::CONVERGENCE;
+  r.message = summary.BriefReport();
+  for (size_t g = 0; g < pb.starts.size(); ++g) {
+    r.segment_start.emplace_back(pb.starts[g][0], pb.starts[g][1], pb.starts[g][2]);
+  }
+  r.segment_start_ns = pb.start_ns;
+  if (options.compute_covariance) {
+    r.covariance_ok = ComputeCovariance(pb, sys.num_params(), &r.covariance);
+  }
+  return r;
+}
+
+BatchResult BoundAt(const System& sys, const ControlSignal& controls,
+                    std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params_true,
+                    const std::vector<Eigen::Vector3d>& segment_start_true,
+                    const BatchOptions& options) {
+  std::string error;
+  if (!options.IsValid(sys, &error)) throw std::invalid_argument("bound: " + error);
+  Problem pb;
+  pb.params = params_true;
+  Build(sys, controls, meas, options, &pb);
+  if (segment_start_true.size() != pb.starts.size()) {
+    throw std::invalid_argument("bound: " + std::to_string(segment_start_true.size()) +
+                                " start poses for " + std::to_string(pb.starts.size()) +
+                                " segments");
+  }
+  for (size_t g = 0; g < pb.starts.size(); ++g) {
+    pb.starts[g] = {segment_start_true[g].x(), segment_start_true[g].y(),
+                    segment_start_true[g].z()};
+  }
+  BatchResult r;
+  r.params = params_true;
+  r.segment_start = segment_start_true;
+  r.segment_start_ns = pb.start_ns;
+  r.covariance_ok = ComputeCovariance(pb, sys.num_params(), &r.covariance);
+  return r;
+}
+
+}  // namespace kincal

@@ -1,0 +1,159 @@
+#include "kincal/estimation/online_calibrator.h"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "kincal/angles.h"
+
+namespace kincal {
+
+bool ProcessNoiseOptions::IsValid(int num_controls, std::string* error) const {
+  if (!control_psd.empty() && static_cast<int>(control_psd.size()) != num_controls) {
+    *error = "control_psd has " + std::to_string(control_psd.size()) + " entries, model has " +
+             std::to_string(num_controls) + " controls";
+    return false;
+  }
+  for (double q : control_psd) {
+    if (!(q >= 0.0) || !std::isfinite(q)) {
+      *error = "control_psd entries must be finite and >= 0";
+      return false;
+    }
+  }
+  if (!(pose_psd.array() >= 0.0).all() || !pose_psd.allFinite()) {
+    *error = "pose_psd entries must be finite and >= 0";
+    return false;
+  }
+  return true;
+}
+
+bool OnlineCalibratorOptions::IsValid(const System& sys, std::string* error) const {
+  if (FilterRegistry::Instance().Create(filter) == nullptr) {
+    *error = "unknown filter '" + filter + "'";
+    return false;
+  }
+  return noise.IsValid(sys.num_controls(), error);
+}
+
+void SystemProcess::Eval(const double* x, const double* v, double* out) const {
+  sys_.Propagate(x, out, t0_, t1_, u_, v);
+}
+
+void SystemProcess::Jacobians(const StateVec& x, StateMat* F, StateNoiseMat* G) const {
+  const int n = sys_.state_dim();
+  const int nv = sys_.noise_dim();
+  Jet xj[kMaxState], vj[kMaxNoise], out[kMaxState];
+  for (int i = 0; i < n; ++i) xj[i] = Jet(x[i], i);
+  for (int k = 0; k < nv; ++k) vj[k] = Jet(0.0, n + k);
+  sys_.Propagate(xj, out, t0_, t1_, u_, vj);
+  F->resize(n, n);
+  G->resize(n, nv);
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) (*F)(i, j) = out[i].v[j];
+    for (int k = 0; k < nv; ++k) (*G)(i, k) = out[i].v[n + k];
+  }
+}
+
+void SystemPoseMeasurement::Jacobian(const StateVec& x, MeasStateMat* H) const {
+  const int n = sys_.state_dim();
+  Jet xj[kMaxState], z[3];
+  for (int i = 0; i < n; ++i) xj[i] = Jet(x[i], i);
+  sys_.Measure(xj, z);
+  H->resize(3, n);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < n; ++j) (*H)(i, j) = z[i].v[j];
+  }
+}
+
+NoiseMat ProcessNoiseSqrt(const System& sys, const ProcessNoiseOptions& noise, double dt_s) {
+  const int nc = sys.num_controls();
+  NoiseMat Sv = NoiseMat::Zero(sys.noise_dim(), sys.noise_dim());
+  if (dt_s <= 0.0) return Sv;
+  for (int c = 0; c < nc && c < static_cast<int>(noise.control_psd.size()); ++c) {
+    // A white noise of PSD q averaged over dt has variance q / dt.
+    Sv(c, c) = std::sqrt(noise.control_psd[static_cast<size_t>(c)] / dt_s);
+  }
+  for (int i = 0; i < 3; ++i) Sv(nc + i, nc + i) = std::sqrt(noise.pose_psd[i] * dt_s);
+  return Sv;
+}
+
+OnlineCalibrator::OnlineCalibrator(const System& sys, OnlineCalibratorOptions options,
+                                   TimeNs time_origin_ns)
+    : sys_(sys),
+      options_(std::move(options)),
+      controls_(sys.num_controls(), time_origin_ns),
+      meas_(sys) {
+  std::string error;
+  if (!options_.IsValid(sys_, &error)) throw std::invalid_argument("OnlineCalibrator: " + error);
+  filter_ = MakeFilter(options_.filter);
+}
+
+void OnlineCalibrator::Initialize(TimeNs t_ns, const StateVec& x0, const StateMat& P0) {
+  filter_->Initialize(x0, P0, 1u << 2);
+  t_ns_ = t_ns;
+  initialized_ = true;
+  updates_ = 0;
+}
+
+void OnlineCalibrator::Initialize(TimeNs t_ns, const Eigen::Vector3d& pose,
+                                  const Eigen::Matrix3d& pose_cov, const VecN<kMaxState>& params,
+                                  const StateMat& params_cov) {
+  const int n = sys_.state_dim();
+  const int np = sys_.num_params();
+  StateVec x0 = sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_,
+                               controls_.ToSeconds(t_ns));
+  StateMat P0 = StateMat::Zero(n, n);
+  P0.topLeftCorner(3, 3) = pose_cov;
+  P0.block(3, 3, np, np) = params_cov;
+  // Effect states: a small variance so that the filter may correct them.
+  for (int i = sys_.state_offset(); i < n; ++i) P0(i, i) = 1e-6;
+  Initialize(t_ns, x0, P0);
+}
+
+void OnlineCalibrator::PredictTo(TimeNs t_ns) {
+  if (t_ns <= t_ns_) return;
+  const double t0 = controls_.ToSeconds(t_ns_);
+  const double t1 = controls_.ToSeconds(t_ns);
+  SystemProcess f(sys_, controls_, t0, t1);
+  filter_->Predict(f, ProcessNoiseSqrt(sys_, options_.noise, t1 - t0));
+  t_ns_ = t_ns;
+}
+
+UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
+                                       const Eigen::Matrix3d& R) {
+  if (!initialized_ || t_ns < t_ns_) {
+    UpdateResult r;
+    r.ok = false;
+    return r;
+  }
+  PredictTo(t_ns);
+  Eigen::LLT<Eigen::Matrix3d> llt(R);
+  const MeasMat Sw = llt.matrixL().toDenseMatrix();
+  const MeasVec zv = z;
+  UpdateResult r = filter_->Update(meas_, zv, Sw);
+  if (r.ok) ++updates_;
+  return r;
+}
+
+void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z,
+                                 const Eigen::Matrix3d& R) {
+  // The target pose is measured; with a lever arm the reference pose differs, so invert
+  // the measurement map at the current parameters.
+  StateVec x = filter_->mean();
+  sys_.SetPoseFromMeasurement(z.data(), x.data());
+  sys_.ResetEffectStates(&x, controls_, controls_.ToSeconds(t_ns));
+  filter_->SetMean(x);
+  const StateVec pose = x.head(3);
+  filter_->ResetBlock(0, pose, R);
+  t_ns_ = t_ns;
+}
+
+VecN<kMaxState> OnlineCalibrator::params() const {
+  return filter_->mean().segment(sys_.param_offset(), sys_.num_params());
+}
+
+StateMat OnlineCalibrator::params_covariance() const {
+  const int np = sys_.num_params();
+  return filter_->covariance().block(sys_.param_offset(), sys_.param_offset(), np, np);
+}
+
+}  // namespace kincal
