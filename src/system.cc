@@ -63,6 +63,11 @@ System::System(std::shared_ptr<const KinematicModel> model,
       }
     }
   }
+  if (num_effect_states_ > kMaxEffectStates) {
+    throw std::invalid_argument("System: " + std::to_string(num_effect_states_) +
+                                " effect states exceed kMaxEffectStates = " +
+                                std::to_string(kMaxEffectStates));
+  }
   if (state_dim() > kMaxState) {
     throw std::invalid_argument("System: augmented state of " + std::to_string(state_dim()) +
                                 " exceeds kMaxState = " + std::to_string(kMaxState));
@@ -228,6 +233,7 @@ void System::Propagate(const T* x_in, T* x_out, double t0_s, double t1_s,
   }
   if (v != nullptr) {
     for (int i = 0; i < kPoseDim; ++i) x[i] += v[nc + i];
+    for (int i = 0; i < num_effect_states_; ++i) x[state_offset() + i] += v[nc + kPoseDim + i];
   }
   std::copy_n(x, n, x_out);
 }

@@ -8,6 +8,7 @@
 //   v[0..nc)   constant perturbation of each commanded control over the step
 //              (control units); a white control noise of PSD q gives std sqrt(q / dt)
 //   v[nc..nc+3) additive pose perturbation at the end of the step (m, m, rad)
+//   v[nc+3..)  additive perturbation of each effect state at the end of the step
 // Measurement: the tracked target pose (x, y, theta); heading is an angle (wrapped).
 //
 // Propagation is exact between control samples for constant realised controls (SE(2)
@@ -46,7 +47,7 @@ class System {
   int num_params() const { return num_params_; }
   int num_states() const { return num_effect_states_; }
   int state_dim() const { return kPoseDim + num_params_ + num_effect_states_; }
-  int noise_dim() const { return model_->num_controls() + kPoseDim; }
+  int noise_dim() const { return model_->num_controls() + kPoseDim + num_effect_states_; }
   int num_controls() const { return model_->num_controls(); }
   // Offset of the parameter block and of the effect-state block in the augmented state.
   int param_offset() const { return kPoseDim; }

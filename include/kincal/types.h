@@ -16,8 +16,11 @@ namespace kincal {
 inline constexpr int kMaxState = 24;
 // Control channels of any model.
 inline constexpr int kMaxControls = 4;
-// Process-noise inputs: one per control channel + 3 additive pose terms.
-inline constexpr int kMaxNoise = kMaxControls + 3;
+// Effect states (e.g. a lag's realised controls) of all effects together.
+inline constexpr int kMaxEffectStates = 6;
+// Process-noise inputs: one per control channel, 3 additive pose terms, one per effect
+// state.
+inline constexpr int kMaxNoise = kMaxControls + 3 + kMaxEffectStates;
 // Measurement dimension (a planar pose is 3).
 inline constexpr int kMaxMeas = 6;
 // Derivative slots of the autodiff scalar: enough for state + noise, or for one batch

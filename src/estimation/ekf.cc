@@ -64,15 +64,6 @@ class Ekf final : public Filter {
 
   const StateVec& mean() const override { return x_; }
   StateMat covariance() const override { return P_; }
-  void ResetBlock(int start, const StateVec& m, const StateMat& C) override {
-    const int k = static_cast<int>(m.size());
-    const int n = static_cast<int>(x_.size());
-    x_.segment(start, k) = m;
-    P_.block(start, 0, k, n).setZero();
-    P_.block(0, start, n, k).setZero();
-    P_.block(start, start, k, k) = C;
-  }
-  void SetMean(const StateVec& x) override { x_ = x; }
 
  private:
   StateVec x_;

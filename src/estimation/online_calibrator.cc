@@ -19,6 +19,10 @@ bool ProcessNoiseOptions::IsValid(int num_controls, std::string* error) const {
       return false;
     }
   }
+  if (!(effect_state_psd >= 0.0) || !std::isfinite(effect_state_psd)) {
+    *error = "effect_state_psd must be finite and >= 0";
+    return false;
+  }
   if (!(pose_psd.array() >= 0.0).all() || !pose_psd.allFinite()) {
     *error = "pose_psd entries must be finite and >= 0";
     return false;
@@ -73,6 +77,7 @@ NoiseMat ProcessNoiseSqrt(const System& sys, const ProcessNoiseOptions& noise, d
     Sv(c, c) = std::sqrt(noise.control_psd[static_cast<size_t>(c)] / dt_s);
   }
   for (int i = 0; i < 3; ++i) Sv(nc + i, nc + i) = std::sqrt(noise.pose_psd[i] * dt_s);
+  for (int i = nc + 3; i < sys.noise_dim(); ++i) Sv(i, i) = std::sqrt(noise.effect_state_psd * dt_s);
   return Sv;
 }
 
@@ -99,14 +104,17 @@ void OnlineCalibrator::Initialize(TimeNs t_ns, const Eigen::Vector3d& pose,
                                   const StateMat& params_cov) {
   const int n = sys_.state_dim();
   const int np = sys_.num_params();
-  StateVec x0 = sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_,
-                               controls_.ToSeconds(t_ns));
-  StateMat P0 = StateMat::Zero(n, n);
-  P0.topLeftCorner(3, 3) = pose_cov;
-  P0.block(3, 3, np, np) = params_cov;
+  StateVec x = sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_,
+                              controls_.ToSeconds(t_ns));
+  StateMat P = StateMat::Zero(n, n);
+  P.topLeftCorner(3, 3) = pose_cov;  // replaced by ResetPose below
+  P.block(3, 3, np, np) = params_cov;
   // Effect states: a small variance so that the filter may correct them.
-  for (int i = sys_.state_offset(); i < n; ++i) P0(i, i) = 1e-6;
-  Initialize(t_ns, x0, P0);
+  for (int i = sys_.state_offset(); i < n; ++i) P(i, i) = 1e-6;
+  filter_->Initialize(x, P, 1u << 2);
+  initialized_ = true;
+  updates_ = 0;
+  ResetPose(t_ns, pose, pose_cov);
 }
 
 void OnlineCalibrator::PredictTo(TimeNs t_ns) {
@@ -136,14 +144,45 @@ UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
 
 void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z,
                                  const Eigen::Matrix3d& R) {
-  // The target pose is measured; with a lever arm the reference pose differs, so invert
-  // the measurement map at the current parameters.
+  // The camera measures the target pose; the state holds the reference pose. Invert the
+  // measurement map at the current parameters, x_pose = g(z, p), and propagate the
+  // covariance through its Jacobians: the pose inherits the uncertainty of a lever arm
+  // and stays correlated with it.
+  const int n = sys_.state_dim();
   StateVec x = filter_->mean();
-  sys_.SetPoseFromMeasurement(z.data(), x.data());
   sys_.ResetEffectStates(&x, controls_, controls_.ToSeconds(t_ns));
-  filter_->SetMean(x);
-  const StateVec pose = x.head(3);
-  filter_->ResetBlock(0, pose, R);
+  auto g = [&](const StateVec& xs, const Eigen::Vector3d& zs) {
+    StateVec out = xs;
+    sys_.SetPoseFromMeasurement(zs.data(), out.data());
+    return Eigen::Vector3d(out.head(3));
+  };
+  const Eigen::Vector3d pose = g(x, z);
+  // J = d(new state)/d(old state): identity except the pose rows; Gz = d pose / d z.
+  StateMat J = StateMat::Identity(n, n);
+  J.topLeftCorner(3, 3).setZero();
+  Eigen::Matrix3d Gz;
+  for (int j = 3; j < n; ++j) {
+    const double h = 1e-6 * std::max(1.0, std::abs(x[j]));
+    StateVec xp = x, xm = x;
+    xp[j] += h;
+    xm[j] -= h;
+    Eigen::Vector3d d = g(xp, z) - g(xm, z);
+    d.z() = WrapAngle(d.z());
+    J.block(0, j, 3, 1) = d / (2.0 * h);
+  }
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d zp = z, zm = z;
+    zp[j] += 1e-6;
+    zm[j] -= 1e-6;
+    Eigen::Vector3d d = g(x, zp) - g(x, zm);
+    d.z() = WrapAngle(d.z());
+    Gz.col(j) = d / 2e-6;
+  }
+  StateMat P = J * filter_->covariance() * J.transpose();
+  P.topLeftCorner(3, 3) += Gz * R * Gz.transpose();
+  x.head(3) = pose;
+  x[2] = WrapAngle(x[2]);
+  filter_->Initialize(x, P, 1u << 2);
   t_ns_ = t_ns;
 }
 

@@ -137,18 +137,6 @@ class SrDd2 final : public Filter {
   const StateVec& mean() const override { return x_; }
   StateMat covariance() const override { return S_ * S_.transpose(); }
 
-  void ResetBlock(int start, const StateVec& m, const StateMat& C) override {
-    StateMat P = covariance();
-    const int k = static_cast<int>(m.size());
-    const int n = static_cast<int>(x_.size());
-    x_.segment(start, k) = m;
-    P.block(start, 0, k, n).setZero();
-    P.block(0, start, n, k).setZero();
-    P.block(start, start, k, k) = C;
-    Eigen::LLT<StateMat> llt(P);
-    S_ = llt.matrixL();
-  }
-  void SetMean(const StateVec& x) override { x_ = x; }
 
  private:
   StateVec x_;

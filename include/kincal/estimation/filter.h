@@ -65,11 +65,6 @@ class Filter {
 
   virtual const StateVec& mean() const = 0;
   virtual StateMat covariance() const = 0;
-  // Replaces elements [start, start + m.size()) by mean m and covariance C, removing their
-  // correlation with the rest of the state (e.g. a new run starting from a measured pose).
-  virtual void ResetBlock(int start, const StateVec& m, const StateMat& C) = 0;
-  // Overwrites the mean only (e.g. re-initialised effect states).
-  virtual void SetMean(const StateVec& x) = 0;
 };
 
 class FilterRegistry {

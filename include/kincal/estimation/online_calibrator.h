@@ -23,6 +23,10 @@ struct ProcessNoiseOptions {
   std::vector<double> control_psd;
   // Additive pose noise (m^2/s, m^2/s, rad^2/s): unmodelled motion.
   Eigen::Vector3d pose_psd = Eigen::Vector3d::Zero();
+  // Additive noise on every effect state ((state unit)^2/s). Effect states are functions
+  // of parameters and the command history; without a little noise their covariance
+  // collapses onto that function and rounding makes it indefinite.
+  double effect_state_psd = 1e-9;
   bool IsValid(int num_controls, std::string* error) const;
 };
 
