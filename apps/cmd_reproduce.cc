@@ -25,6 +25,9 @@ Command AddReproduce(CLI::App& app) {
   app.add_option("--seed", args->opt.seed, "random seed")->capture_default_str();
   app.add_option("--trials", args->opt.trials, "Monte-Carlo repetitions (RMS over trials)")
       ->capture_default_str();
+  app.add_option("--centroid-sigma", args->opt.centroid_sigma_px,
+                 "marker centre noise, px (thesis: 0.02)")
+      ->capture_default_str();
   app.add_option("--json", args->json, "write the results as JSON to this file");
   return [args]() -> int {
     const ThesisOptions& o = args->opt;
@@ -43,9 +46,9 @@ Command AddReproduce(CLI::App& app) {
       const auto& e = r.joint_estimate.at(name);
       const auto& s = r.joint_sigma.at(name);
       std::cout << "    " << std::setw(6) << name << "  " << std::setw(10) << v
-                << "   R_L " << e[0] * 1e3 << " +- " << s[0] * 1e3 << " mm, R_R " << e[1] * 1e3
+                << std::fixed << std::setprecision(5) << "   R_L " << e[0] * 1e3 << " +- " << s[0] * 1e3 << " mm, R_R " << e[1] * 1e3
                 << " +- " << s[1] * 1e3 << " mm, D " << e[2] * 1e3 << " +- " << s[2] * 1e3
-                << " mm\n";
+                << " mm\n" << std::defaultfloat << std::setprecision(4);
     }
     std::cout << "    " << std::setw(6) << "bound" << "  " << std::setw(10)
               << r.joint_bound_nnde_percent << "   (Bayesian Cramer-Rao)\n";

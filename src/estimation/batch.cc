@@ -16,9 +16,9 @@ namespace {
 //                   [1] all System parameters.
 class SegmentCost final : public ceres::CostFunction {
  public:
-  SegmentCost(const System& sys, const ControlSignal& u, double t0_s,
+  SegmentCost(const System& sys, const ControlSignal& u, double t0_s, double warmup_s,
               std::vector<const PoseMeasurement*> meas)
-      : sys_(sys), u_(u), t0_(t0_s), meas_(std::move(meas)) {
+      : sys_(sys), u_(u), t0_(t0_s), warmup_(warmup_s), meas_(std::move(meas)) {
     set_num_residuals(3 * static_cast<int>(meas_.size()));
     mutable_parameter_block_sizes()->push_back(3);
     mutable_parameter_block_sizes()->push_back(sys_.num_params());
@@ -48,7 +48,16 @@ class SegmentCost final : public ceres::CostFunction {
     for (int i = 0; i < 3; ++i) x[i] = Seed<T>(parameters[0][i], i);
     for (int i = 0; i < np; ++i) x[3 + i] = Seed<T>(parameters[1][i], 3 + i);
     for (int i = sys_.state_offset(); i < sys_.state_dim(); ++i) x[i] = T(0.0);
-    sys_.InitEffectStates(x, u_, t0_);
+    if (sys_.num_states() > 0 && warmup_ > 0.0) {
+      // Warm the effect states up through the command history; the pose moved by the
+      // warm-up is discarded (the segment's start pose is the free parameter block).
+      const T pose[3] = {x[0], x[1], x[2]};
+      sys_.InitEffectStates(x, u_, t0_ - warmup_);
+      sys_.Propagate(x, x, t0_ - warmup_, t0_, u_, static_cast<const T*>(nullptr));
+      for (int i = 0; i < 3; ++i) x[i] = pose[i];
+    } else {
+      sys_.InitEffectStates(x, u_, t0_);
+    }
     double t = t0_;
     for (size_t k = 0; k < meas_.size(); ++k) {
       sys_.Propagate(x, x, t, times_[k], u_, static_cast<const T*>(nullptr));
@@ -90,6 +99,7 @@ class SegmentCost final : public ceres::CostFunction {
   const System& sys_;
   const ControlSignal& u_;
   double t0_;
+  double warmup_;
   std::vector<const PoseMeasurement*> meas_;
   std::vector<Eigen::Matrix3d> whiten_;
   std::vector<double> times_;
@@ -159,7 +169,7 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
   for (size_t g = 0; g < groups.size(); ++g) {
     pb->start_ns[g] = groups[g].front()->t_ns;
     const double t0 = controls.ToSeconds(pb->start_ns[g]);
-    auto* cost = new SegmentCost(sys, controls, t0, groups[g]);
+    auto* cost = new SegmentCost(sys, controls, t0, options.warmup_s, groups[g]);
     pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
   }
   if (options.prior) pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
@@ -186,6 +196,10 @@ bool ComputeCovariance(const Problem& cpb, int np, Eigen::MatrixXd* cov) {
 bool BatchOptions::IsValid(const System& sys, std::string* error) const {
   if (max_iterations < 1) {
     *error = "max_iterations must be >= 1";
+    return false;
+  }
+  if (!(warmup_s >= 0.0)) {
+    *error = "warmup_s must be >= 0";
     return false;
   }
   if (huber_scale < 0.0) {

@@ -4,8 +4,10 @@
 // segment has a free start pose at the time of its first measurement; the model is
 // propagated open-loop through the control history from there, and every pose
 // measurement contributes its whitened residual R^-1/2 (z - h(x(t))), heading wrapped.
-// All segments share one parameter block (model + effect parameters). Effect states
-// start at steady state for the controls in force at the segment start.
+// All segments share one parameter block (model + effect parameters). Effect states (a
+// lag's realised controls) are warmed up: they start at steady state `warmup_s` before
+// the segment and run through the command history up to its start, so that their value
+// at the start is a function of the parameters and the history, not a free guess.
 //
 // An optional Gaussian prior on the parameters makes the problem Bayesian (needed when
 // the design cannot identify every parameter, e.g. one constant-control experiment).
@@ -44,6 +46,8 @@ struct BatchOptions {
   std::optional<ParamPrior> prior;
   bool compute_covariance = true;
   int num_threads = 1;
+  // Effect-state warm-up before each segment start (s); 0 = steady state at the start.
+  double warmup_s = 2.0;
   bool IsValid(const System& sys, std::string* error) const;
 };
 
