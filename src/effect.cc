@@ -1,5 +1,6 @@
 #include "kincal/effect.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace kincal {
@@ -16,6 +17,28 @@ std::string_view ToString(EffectStage s) {
       return "measurement";
   }
   return "?";
+}
+
+bool BindChannels(const KinematicModel& model, const std::vector<std::string>& requested,
+                  std::vector<int>* channels, std::string* error) {
+  channels->clear();
+  if (requested.empty()) {
+    for (int c = 0; c < model.num_controls(); ++c) channels->push_back(c);
+    return true;
+  }
+  for (const auto& ch : requested) {
+    const int idx = model.ControlIndex(ch);
+    if (idx < 0) {
+      *error = "model '" + std::string(model.name()) + "' has no control '" + ch + "'";
+      return false;
+    }
+    if (std::find(channels->begin(), channels->end(), idx) != channels->end()) {
+      *error = "control '" + ch + "' listed twice";
+      return false;
+    }
+    channels->push_back(idx);
+  }
+  return true;
 }
 
 EffectRegistry& EffectRegistry::Instance() {

@@ -41,17 +41,25 @@ StateVec TestState(const System& sys, const std::vector<double>& model_params,
   set("dtheta", 0.03);
   set("c_slip", 0.01);
   set("bias_rad_s", 0.02);
+  set("c_track", 0.05);
+  set("backlash", 0.01);
+  for (const auto& c : sys.model().controls()) {
+    set(("asym_" + c.name).c_str(), 0.04);
+    set(("band_" + c.name).c_str(), 0.001);
+  }
   return sys.MakeState(0.3, -0.1, 0.4, p, u, 1.003);
 }
 
-class ModelTest : public ::testing::TestWithParam<std::tuple<int, bool>> {};
+class ModelTest : public ::testing::TestWithParam<std::tuple<int, int>> {};
 
 TEST_P(ModelTest, AutodiffJacobiansMatchFiniteDifferences) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(std::get<0>(GetParam()))];
-  const bool with_effects = std::get<1>(GetParam());
   std::vector<std::string> effects;
-  if (with_effects) {
+  if (std::get<1>(GetParam()) == 1) {
     effects = {"time_offset", "actuator_lag", "lever_arm", "lateral_slip", "yaw_rate_bias"};
+  } else if (std::get<1>(GetParam()) == 2) {
+    effects = {"asymmetric_gain", "dead_band", "effective_track"};
+    if (MakeModel(sc.model)->has_steering()) effects.push_back("backlash");
   }
   const System sys = MakeSystem(sc.model, effects);
   const ControlSignal u = RandomControls(sys.num_controls(), sc.lo, sc.hi, 3);
@@ -103,12 +111,16 @@ TEST_P(BareModelTest, ExactIntegrationMatchesFineEuler) {
   EXPECT_NEAR(exact[2], th, 2e-4) << sc.model;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllModels, ModelTest, ::testing::Combine(::testing::Range(0, 4), ::testing::Bool()),
-    [](const ::testing::TestParamInfo<std::tuple<int, bool>>& info) {
-      return AllModelScenarios()[static_cast<size_t>(std::get<0>(info.param))].model +
-             (std::get<1>(info.param) ? std::string("_with_effects") : std::string());
-    });
+std::string ModelTestName(const ::testing::TestParamInfo<std::tuple<int, int>>& info) {
+  static const char* kSets[] = {"", "_timing_lag_lever_slip_bias",
+                                "_asym_deadband_track_backlash"};
+  return AllModelScenarios()[static_cast<size_t>(std::get<0>(info.param))].model +
+         std::string(kSets[std::get<1>(info.param)]);
+}
+
+INSTANTIATE_TEST_SUITE_P(AllModels, ModelTest,
+                         ::testing::Combine(::testing::Range(0, 4), ::testing::Range(0, 3)),
+                         ModelTestName);
 INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 4),
                          [](const ::testing::TestParamInfo<int>& info) {
                            return AllModelScenarios()[static_cast<size_t>(info.param)].model;

@@ -37,6 +37,11 @@ struct Pose2 {
   T theta{0.0};  // rad
 };
 
+// Binds channel-wise effects: `requested` names (empty = all channels) to indices,
+// filling *channels; returns false with *error on an unknown name.
+bool BindChannels(const KinematicModel& model, const std::vector<std::string>& requested,
+                  std::vector<int>* channels, std::string* error);
+
 // Options for constructing an effect: which control channels it acts on (by name; empty
 // means every channel the effect supports on that model).
 struct EffectSpec {
@@ -54,6 +59,10 @@ class Effect {
   virtual const std::vector<ParamInfo>& params() const = 0;
   int num_params() const { return static_cast<int>(params().size()); }
 
+  // Residual signature, for the diagnosis: "component:regressor" pairs whose correlation
+  // this effect explains (components: along, cross, heading; regressors: see
+  // analysis/diagnosis.h).
+  virtual std::vector<std::string> signature() const { return {}; }
   // Whether the effect makes sense on `model` (e.g. backlash needs a steering channel).
   virtual bool AppliesTo(const KinematicModel& model) const = 0;
   // Binds to a model and the requested channels. Returns false with *error set if the

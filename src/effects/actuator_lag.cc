@@ -1,6 +1,7 @@
-// actuator_lag: first-order lag between command and realised control on the selected
-// channels (default: all of them):
-//   du_r/dt = (u_cmd - u_r) / tau_s
+// actuator_lag: first-order lag between command and realised control.
+//   du_r/dt = (u_cmd - u_r) / tau
+// `actuator_lag` lags every channel with one shared time constant `tau_s`;
+// `actuator_lag[a,b]` gives each listed channel its own `tau_s_<channel>`.
 // The realised controls are internal states; over a step of length h with constant
 // command they follow the exact exponential, and the motion uses their mean over the step.
 #include <cmath>
@@ -12,32 +13,30 @@ namespace {
 
 class ActuatorLag final : public EffectImpl<ActuatorLag> {
  public:
+  ActuatorLag() : params_{{"tau_s", "s", 0.1, 0.1}} {}
   std::string_view name() const override { return "actuator_lag"; }
   std::string_view description() const override {
     return "first-order lag tau_s between commanded and realised control";
   }
   EffectStage stage() const override { return EffectStage::kControlMap; }
-  const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"tau_s", "s", 0.1, 0.1}};
-    return kParams;
-  }
+  const std::vector<ParamInfo>& params() const override { return params_; }
   int num_states() const override { return static_cast<int>(channels_.size()); }
   bool time_varying() const override { return true; }
+  std::vector<std::string> signature() const override {
+    return {"along:accel", "heading:yaw_accel"};
+  }
 
   bool Bind(const KinematicModel& model, const std::vector<std::string>& channels,
             std::string* error) override {
-    channels_.clear();
-    if (channels.empty()) {
-      for (int c = 0; c < model.num_controls(); ++c) channels_.push_back(c);
-      return true;
-    }
-    for (const auto& ch : channels) {
-      const int idx = model.ControlIndex(ch);
-      if (idx < 0) {
-        *error = "model '" + std::string(model.name()) + "' has no control '" + ch + "'";
-        return false;
+    if (!BindChannels(model, channels, &channels_, error)) return false;
+    shared_ = channels.empty();
+    params_.clear();
+    if (shared_) {
+      params_.push_back({"tau_s", "s", 0.1, 0.1});
+    } else {
+      for (int c : channels_) {
+        params_.push_back({"tau_s_" + model.controls()[static_cast<size_t>(c)].name, "s", 0.1, 0.1});
       }
-      channels_.push_back(idx);
     }
     return true;
   }
@@ -49,11 +48,12 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
   template <class T>
   void AdvanceT(const T* p, const T& dt, T* s, T* u) const {
     using std::exp;
-    // Guard the time constant away from zero: tau -> 0 is "no lag".
-    const T tau = p[0] * p[0] < 1e-12 ? T(1e-6) : (p[0] < 0.0 ? -p[0] : p[0]);
-    const T decay = exp(-dt / tau);
-    const T mean_factor = tau / dt * (1.0 - decay);  // mean of exp(-t/tau) over [0, dt]
     for (size_t k = 0; k < channels_.size(); ++k) {
+      const T& raw = p[shared_ ? 0 : k];
+      // |tau| guarded away from zero: tau -> 0 is "no lag".
+      const T tau = raw * raw < 1e-12 ? T(1e-6) : (raw < 0.0 ? -raw : raw);
+      const T decay = exp(-dt / tau);
+      const T mean_factor = tau / dt * (1.0 - decay);  // mean of exp(-t/tau) over [0, dt]
       const int c = channels_[k];
       const T target = u[c];
       const T diff = s[k] - target;
@@ -63,7 +63,9 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
   }
 
  private:
+  std::vector<ParamInfo> params_;
   std::vector<int> channels_;
+  bool shared_ = true;
 };
 
 KINCAL_REGISTER_EFFECT(ActuatorLag)

@@ -16,6 +16,7 @@ class LeverArm final : public EffectImpl<LeverArm> {
   std::string_view description() const override {
     return "target offset (dx, dy, dtheta) from the kinematic reference point";
   }
+  std::vector<std::string> signature() const override { return {"along:turn_rate", "cross:turn_rate", "heading:const"}; }
   EffectStage stage() const override { return EffectStage::kMeasurement; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {

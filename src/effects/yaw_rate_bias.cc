@@ -14,6 +14,7 @@ class YawRateBias final : public EffectImpl<YawRateBias> {
   std::string_view description() const override {
     return "constant turn-rate offset bias_rad_s while moving";
   }
+  std::vector<std::string> signature() const override { return {"heading:moving"}; }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {{"bias_rad_s", "rad/s", 0.0, 0.05}};

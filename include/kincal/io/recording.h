@@ -1,0 +1,64 @@
+// A recording: commanded controls and measured target poses on one time base.
+//
+// Readers for the formats kincal accepts. Every reader reports bad input as a
+// RecordingError naming the file, the line (or LCM event) and what was expected; nothing
+// is silently dropped: repeated timestamps, reordered rows and skipped rows are counted in
+// RecordingStats and reported by the caller.
+//
+// Time: files carry seconds on any epoch; on reading, times become int64 ns relative to
+// the recording's origin (the earliest time in either stream), stored in `origin_s`.
+#pragma once
+
+#include <Eigen/Core>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "kincal/control_signal.h"
+#include "kincal/estimation/batch.h"
+#include "kincal/model.h"
+
+namespace kincal {
+
+class RecordingError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct PoseSample {
+  TimeNs t_ns = 0;  // recording time base
+  Eigen::Vector3d z = Eigen::Vector3d::Zero();  // x (m), y (m), theta (rad)
+};
+
+struct RecordingStats {
+  int control_rows = 0;
+  int pose_rows = 0;
+  int control_repeated_times = 0;  // later row with the same time replaced the earlier
+  int pose_repeated_times = 0;     // duplicate pose times: the later row kept
+  int comment_lines = 0;
+};
+
+struct Recording {
+  std::string source;        // human-readable origin ("file.csv + file.csv", "MR.CLAM robot 3")
+  double origin_s = 0.0;     // file time of t_ns = 0
+  ControlSignal controls;    // commanded controls, model's channel order
+  std::vector<PoseSample> poses;  // sorted by time, unique times
+  RecordingStats stats;
+};
+
+// C.csv: header "t,<control names of the model>" (any column order, extra columns are an
+// error); P.csv: header "t,x,y,theta". Times in seconds, any epoch.
+Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
+                           const KinematicModel& model);
+
+// UTIAS MR.CLAM: DIR/RobotN_Odometry.dat (t v omega) and DIR/RobotN_Groundtruth.dat
+// (t x y theta); '#' starts a comment. Controls are the unicycle model's (v, omega).
+Recording ReadMrclam(const std::string& dir, int robot);
+
+// A kincald recording (LCM event log): kincal.controls_t on `controls_channel` and
+// kincal.pose_t on `pose_channel` (times from their utime fields).
+Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
+                     const std::string& controls_channel = "KINCAL_CONTROLS",
+                     const std::string& pose_channel = "KINCAL_POSE");
+
+}  // namespace kincal

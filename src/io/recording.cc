@@ -1,0 +1,225 @@
+#include "kincal/io/recording.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "kincal/angles.h"
+
+namespace kincal {
+namespace {
+
+struct Row {
+  int line;
+  double t;
+  std::vector<double> v;
+};
+
+std::string Trim(std::string s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  const auto e = s.find_last_not_of(" \t\r");
+  return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> Split(const std::string& s, bool whitespace) {
+  std::vector<std::string> out;
+  if (whitespace) {
+    std::istringstream in(s);
+    std::string tok;
+    while (in >> tok) out.push_back(tok);
+  } else {
+    std::string cur;
+    for (char c : s) {
+      if (c == ',') {
+        out.push_back(Trim(cur));
+        cur.clear();
+      } else {
+        cur += c;
+      }
+    }
+    out.push_back(Trim(cur));
+  }
+  return out;
+}
+
+double ParseNumber(const std::string& tok, const std::string& where, const std::string& what) {
+  double v = 0.0;
+  const char* b = tok.data();
+  const char* e = tok.data() + tok.size();
+  auto [p, ec] = std::from_chars(b, e, v);
+  if (ec != std::errc() || p != e || !std::isfinite(v)) {
+    throw RecordingError(where + ": " + what + ": expected a finite number, got '" + tok + "'");
+  }
+  return v;
+}
+
+std::ifstream Open(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw RecordingError(path + ": cannot open for reading");
+  return in;
+}
+
+// Reads a CSV with a header; returns rows with columns ordered as `wanted`.
+std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted) {
+  std::ifstream in = Open(path);
+  std::string line;
+  int n = 0;
+  std::vector<int> order;
+  std::vector<Row> rows;
+  while (std::getline(in, line)) {
+    ++n;
+    line = Trim(line);
+    if (line.empty() || line[0] == '#') continue;
+    const auto cols = Split(line, false);
+    const std::string where = path + ":" + std::to_string(n);
+    if (order.empty()) {
+      std::map<std::string, int> index;
+      for (size_t i = 0; i < cols.size(); ++i) {
+        if (index.count(cols[i])) throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
+        index[cols[i]] = static_cast<int>(i);
+      }
+      std::string expected = "t";
+      for (const auto& w : wanted) expected += "," + w;
+      std::vector<std::string> all = {"t"};
+      all.insert(all.end(), wanted.begin(), wanted.end());
+      for (const auto& w : all) {
+        if (!index.count(w)) {
+          throw RecordingError(where + ": header lacks column '" + w + "' (expected header '" +
+                               expected + "')");
+        }
+        order.push_back(index[w]);
+      }
+      if (cols.size() != all.size()) {
+        for (const auto& c : cols) {
+          if (std::find(all.begin(), all.end(), c) == all.end()) {
+            throw RecordingError(where + ": unexpected column '" + c + "' (expected header '" +
+                                 expected + "')");
+          }
+        }
+      }
+      continue;
+    }
+    if (cols.size() != order.size()) {
+      throw RecordingError(where + ": expected " + std::to_string(order.size()) +
+                           " values, found " + std::to_string(cols.size()));
+    }
+    Row r{n, 0.0, {}};
+    r.t = ParseNumber(cols[static_cast<size_t>(order[0])], where, "column 't'");
+    for (size_t k = 1; k < order.size(); ++k) {
+      r.v.push_back(ParseNumber(cols[static_cast<size_t>(order[k])], where,
+                                "column '" + wanted[k - 1] + "'"));
+    }
+    rows.push_back(std::move(r));
+  }
+  if (order.empty()) throw RecordingError(path + ": empty file (no header)");
+  return rows;
+}
+
+// Whitespace-separated numeric rows with '#' comments (MR.CLAM .dat).
+std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
+  std::ifstream in = Open(path);
+  std::string line;
+  int n = 0;
+  std::vector<Row> rows;
+  while (std::getline(in, line)) {
+    ++n;
+    line = Trim(line);
+    if (line.empty()) continue;
+    if (line[0] == '#') {
+      ++*comments;
+      continue;
+    }
+    const auto cols = Split(line, true);
+    const std::string where = path + ":" + std::to_string(n);
+    if (static_cast<int>(cols.size()) != columns) {
+      throw RecordingError(where + ": expected " + std::to_string(columns) + " values, found " +
+                           std::to_string(cols.size()));
+    }
+    Row r{n, ParseNumber(cols[0], where, "time"), {}};
+    for (int k = 1; k < columns; ++k) r.v.push_back(ParseNumber(cols[static_cast<size_t>(k)], where, "value " + std::to_string(k + 1)));
+    rows.push_back(std::move(r));
+  }
+  return rows;
+}
+
+void CheckOrder(const std::vector<Row>& rows, const std::string& path, const char* what) {
+  if (rows.empty()) throw RecordingError(path + ": no " + std::string(what) + " rows");
+  for (size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i].t < rows[i - 1].t) {
+      std::ostringstream m;
+      m.precision(15);
+      m << path << ":" << rows[i].line << ": time " << rows[i].t << " goes backwards (previous row, line "
+        << rows[i - 1].line << ", has " << rows[i - 1].t << "); " << what
+        << " rows must be in time order";
+      throw RecordingError(m.str());
+    }
+  }
+}
+
+Recording Assemble(std::string source, const std::vector<Row>& controls,
+                   const std::vector<Row>& poses, int num_controls, const std::string& cpath,
+                   const std::string& ppath) {
+  CheckOrder(controls, cpath, "control");
+  CheckOrder(poses, ppath, "pose");
+  Recording rec;
+  rec.source = std::move(source);
+  rec.origin_s = std::min(controls.front().t, poses.front().t);
+  // Spans must overlap.
+  const double c0 = controls.front().t, c1 = controls.back().t;
+  const double p0 = poses.front().t, p1 = poses.back().t;
+  if (c1 < p0 || p1 < c0) {
+    std::ostringstream m;
+    m.precision(15);
+    m << cpath << " and " << ppath << ": time spans do not overlap (controls " << c0 << ".." << c1
+      << " s, poses " << p0 << ".." << p1 << " s): both files must share one time base";
+    throw RecordingError(m.str());
+  }
+  auto to_ns = [&](double t) { return SecondsToNs(t - rec.origin_s); };
+  rec.controls = ControlSignal(num_controls, 0);
+  for (const auto& r : controls) {
+    const size_t before = rec.controls.size();
+    rec.controls.Append(to_ns(r.t), r.v);
+    if (rec.controls.size() == before) ++rec.stats.control_repeated_times;
+  }
+  rec.stats.control_rows = static_cast<int>(controls.size());
+  rec.stats.pose_rows = static_cast<int>(poses.size());
+  for (const auto& r : poses) {
+    PoseSample s{to_ns(r.t), Eigen::Vector3d(r.v[0], r.v[1], WrapAngle(r.v[2]))};
+    if (!rec.poses.empty() && rec.poses.back().t_ns == s.t_ns) {
+      rec.poses.back() = s;
+      ++rec.stats.pose_repeated_times;
+    } else {
+      rec.poses.push_back(s);
+    }
+  }
+  return rec;
+}
+
+}  // namespace
+
+Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
+                           const KinematicModel& model) {
+  std::vector<std::string> names;
+  for (const auto& c : model.controls()) names.push_back(c.name);
+  const auto controls = ReadCsv(controls_csv, names);
+  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"});
+  return Assemble(controls_csv + " + " + poses_csv, controls, poses, model.num_controls(),
+                  controls_csv, poses_csv);
+}
+
+Recording ReadMrclam(const std::string& dir, int robot) {
+  if (robot < 1) throw RecordingError("MR.CLAM robot number must be >= 1");
+  const std::string base = dir + "/Robot" + std::to_string(robot);
+  int comments = 0;
+  const auto odo = ReadDat(base + "_Odometry.dat", 3, &comments);
+  const auto gt = ReadDat(base + "_Groundtruth.dat", 4, &comments);
+  Recording rec = Assemble("MR.CLAM " + dir + " robot " + std::to_string(robot), odo, gt, 2,
+                           base + "_Odometry.dat", base + "_Groundtruth.dat");
+  rec.stats.comment_lines = comments;
+  return rec;
+}
+
+}  // namespace kincal
