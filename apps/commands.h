@@ -11,5 +11,6 @@ using Command = std::function<int()>;
 
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);
+Command AddAnalyze(CLI::App& app);
 
 }  // namespace kincal::app

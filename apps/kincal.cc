@@ -38,6 +38,9 @@ int main(int argc, char** argv) {
   commands[reproduce] = kincal::app::AddReproduce(*reproduce);
   auto* simulate = app.add_subcommand("simulate", "simulate a robot and calibrate it online");
   commands[simulate] = kincal::app::AddSimulate(*simulate);
+  auto* analyze = app.add_subcommand(
+      "analyze", "calibrate on measured data, find missing effects, report before/after");
+  commands[analyze] = kincal::app::AddAnalyze(*analyze);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

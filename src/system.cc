@@ -36,6 +36,7 @@ void IntegrateArc(const Twist<T>& tw, const T& dt, T* x, T* y, T* theta) {
 template void IntegrateArc<double>(const Twist<double>&, const double&, double*, double*,
                                    double*);
 template void IntegrateArc<Jet>(const Twist<Jet>&, const Jet&, Jet*, Jet*, Jet*);
+template void IntegrateArc<BJet>(const Twist<BJet>&, const BJet&, BJet*, BJet*, BJet*);
 
 System::System(std::shared_ptr<const KinematicModel> model,
                std::vector<std::shared_ptr<const Effect>> effects, SystemOptions options)
@@ -255,6 +256,11 @@ template void System::Propagate<double>(const double*, double*, double, double,
                                         const ControlSignal&, const double*) const;
 template void System::Propagate<Jet>(const Jet*, Jet*, double, double, const ControlSignal&,
                                      const Jet*) const;
+template void System::Propagate<BJet>(const BJet*, BJet*, double, double, const ControlSignal&,
+                                      const BJet*) const;
+template void System::Measure<BJet>(const BJet*, BJet*) const;
+template void System::InitEffectStates<BJet>(BJet*, const ControlSignal&, double) const;
+template BJet System::Delay<BJet>(const BJet*) const;
 template void System::Measure<double>(const double*, double*) const;
 template void System::Measure<Jet>(const Jet*, Jet*) const;
 template void System::InitEffectStates<double>(double*, const ControlSignal&, double) const;

@@ -79,22 +79,28 @@ class Effect {
   // commands.
   virtual double Delay(const double* p) const = 0;
   virtual Jet Delay(const Jet* p) const = 0;
+  virtual BJet Delay(const BJet* p) const = 0;
   // --- kControlMap: maps commanded to realised controls in place (u[num_controls]).
   virtual void MapControls(const double* p, double* u) const = 0;
   virtual void MapControls(const Jet* p, Jet* u) const = 0;
+  virtual void MapControls(const BJet* p, BJet* u) const = 0;
   // Steady-state internal states for a constant (mapped) control u.
   virtual void InitStates(const double* p, const double* u, double* s) const = 0;
   virtual void InitStates(const Jet* p, const Jet* u, Jet* s) const = 0;
+  virtual void InitStates(const BJet* p, const BJet* u, BJet* s) const = 0;
   // Advances internal states over dt (s) towards target control u (after MapControls),
   // and replaces u by the mean realised control over the step.
   virtual void Advance(const double* p, double dt, double* s, double* u) const = 0;
   virtual void Advance(const Jet* p, const Jet& dt, Jet* s, Jet* u) const = 0;
+  virtual void Advance(const BJet* p, const BJet& dt, BJet* s, BJet* u) const = 0;
   // --- kMotion: modifies the body twist given realised controls u.
   virtual void ModifyTwist(const double* p, const double* u, Twist<double>* tw) const = 0;
   virtual void ModifyTwist(const Jet* p, const Jet* u, Twist<Jet>* tw) const = 0;
+  virtual void ModifyTwist(const BJet* p, const BJet* u, Twist<BJet>* tw) const = 0;
   // --- kMeasurement: maps the reference pose to the measured target pose.
   virtual void Measure(const double* p, Pose2<double>* pose) const = 0;
   virtual void Measure(const Jet* p, Pose2<Jet>* pose) const = 0;
+  virtual void Measure(const BJet* p, Pose2<BJet>* pose) const = 0;
 };
 
 // CRTP adapter. Derived overrides any of these member templates (the defaults do
@@ -125,12 +131,17 @@ class EffectImpl : public Effect {
 
   double Delay(const double* p) const final { return self().DelayT(p); }
   Jet Delay(const Jet* p) const final { return self().DelayT(p); }
+  BJet Delay(const BJet* p) const final { return self().DelayT(p); }
   void MapControls(const double* p, double* u) const final { self().MapControlsT(p, u); }
   void MapControls(const Jet* p, Jet* u) const final { self().MapControlsT(p, u); }
+  void MapControls(const BJet* p, BJet* u) const final { self().MapControlsT(p, u); }
   void InitStates(const double* p, const double* u, double* s) const final {
     self().InitStatesT(p, u, s);
   }
   void InitStates(const Jet* p, const Jet* u, Jet* s) const final {
+    self().InitStatesT(p, u, s);
+  }
+  void InitStates(const BJet* p, const BJet* u, BJet* s) const final {
     self().InitStatesT(p, u, s);
   }
   void Advance(const double* p, double dt, double* s, double* u) const final {
@@ -139,14 +150,21 @@ class EffectImpl : public Effect {
   void Advance(const Jet* p, const Jet& dt, Jet* s, Jet* u) const final {
     self().AdvanceT(p, dt, s, u);
   }
+  void Advance(const BJet* p, const BJet& dt, BJet* s, BJet* u) const final {
+    self().AdvanceT(p, dt, s, u);
+  }
   void ModifyTwist(const double* p, const double* u, Twist<double>* tw) const final {
     self().ModifyTwistT(p, u, tw);
   }
   void ModifyTwist(const Jet* p, const Jet* u, Twist<Jet>* tw) const final {
     self().ModifyTwistT(p, u, tw);
   }
+  void ModifyTwist(const BJet* p, const BJet* u, Twist<BJet>* tw) const final {
+    self().ModifyTwistT(p, u, tw);
+  }
   void Measure(const double* p, Pose2<double>* pose) const final { self().MeasureT(p, pose); }
   void Measure(const Jet* p, Pose2<Jet>* pose) const final { self().MeasureT(p, pose); }
+  void Measure(const BJet* p, Pose2<BJet>* pose) const final { self().MeasureT(p, pose); }
 
   // Default binding: accepts no channel list (effects acting on channels override).
   bool Bind(const KinematicModel&, const std::vector<std::string>& channels,

@@ -53,6 +53,7 @@ class KinematicModel {
   // Body twist at parameters p[num_params()] and controls u[num_controls()].
   virtual Twist<double> BodyTwist(const double* p, const double* u) const = 0;
   virtual Twist<Jet> BodyTwist(const Jet* p, const Jet* u) const = 0;
+  virtual Twist<BJet> BodyTwist(const BJet* p, const BJet* u) const = 0;
 };
 
 // CRTP adapter: Derived provides
@@ -64,6 +65,9 @@ class ModelImpl : public KinematicModel {
     return static_cast<const Derived*>(this)->Eval(p, u);
   }
   Twist<Jet> BodyTwist(const Jet* p, const Jet* u) const final {
+    return static_cast<const Derived*>(this)->Eval(p, u);
+  }
+  Twist<BJet> BodyTwist(const BJet* p, const BJet* u) const final {
     return static_cast<const Derived*>(this)->Eval(p, u);
   }
 };

@@ -28,6 +28,10 @@ inline constexpr int kMaxMeas = 6;
 inline constexpr int kJetSize = kMaxState + kMaxNoise + 1;
 
 using Jet = ceres::Jet<double, kJetSize>;
+// A smaller autodiff scalar for batch fits: a segment's start pose (3) + up to 9
+// parameters. Larger problems fall back to Jet.
+inline constexpr int kBatchJetSize = 12;
+using BJet = ceres::Jet<double, kBatchJetSize>;
 
 template <int MaxRows>
 using VecN = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, MaxRows, 1>;
@@ -50,6 +54,7 @@ struct ParamInfo {
   std::string unit;      // SI unit, e.g. "m", "rad", "s", "1"
   double default_value;  // generic initial guess for an unknown robot
   double default_sigma;  // 1-sigma of that guess, same unit
+  std::string excitation = {};  // what motion identifies it (for "unobservable" messages)
 };
 
 // Describes one control channel.

@@ -11,9 +11,11 @@
 namespace kincal {
 namespace {
 
+constexpr const char* kHint = "changes of command: starts, stops, accelerations";
+
 class ActuatorLag final : public EffectImpl<ActuatorLag> {
  public:
-  ActuatorLag() : params_{{"tau_s", "s", 0.1, 0.1}} {}
+  ActuatorLag() : params_{{"tau_s", "s", 0.1, 0.1, kHint}} {}
   std::string_view name() const override { return "actuator_lag"; }
   std::string_view description() const override {
     return "first-order lag tau_s between commanded and realised control";
@@ -32,10 +34,11 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
     shared_ = channels.empty();
     params_.clear();
     if (shared_) {
-      params_.push_back({"tau_s", "s", 0.1, 0.1});
+      params_.push_back({"tau_s", "s", 0.1, 0.1, kHint});
     } else {
       for (int c : channels_) {
-        params_.push_back({"tau_s_" + model.controls()[static_cast<size_t>(c)].name, "s", 0.1, 0.1});
+        params_.push_back(
+            {"tau_s_" + model.controls()[static_cast<size_t>(c)].name, "s", 0.1, 0.1, kHint});
       }
     }
     return true;

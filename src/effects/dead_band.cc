@@ -23,7 +23,7 @@ class DeadBand final : public EffectImpl<DeadBand> {
     params_.clear();
     for (int c : channels_) {
       const auto& ch = model.controls()[static_cast<size_t>(c)];
-      params_.push_back({"band_" + ch.name, ch.unit, 0.0, 0.02});
+      params_.push_back({"band_" + ch.name, ch.unit, 0.0, 0.02, "small commands"});
     }
     return true;
   }

@@ -14,7 +14,7 @@ class LateralSlip final : public EffectImpl<LateralSlip> {
   std::vector<std::string> signature() const override { return {"cross:lat_accel"}; }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"c_slip", "s", 0.0, 0.02}};
+    static const std::vector<ParamInfo> kParams = {{"c_slip", "s", 0.0, 0.02, "fast, tight turns"}};
     return kParams;
   }
   template <class T>

@@ -20,7 +20,7 @@ class LeverArm final : public EffectImpl<LeverArm> {
   EffectStage stage() const override { return EffectStage::kMeasurement; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"dx", "m", 0.0, 0.05}, {"dy", "m", 0.0, 0.05}, {"dtheta", "rad", 0.0, 0.05}};
+        {"dx", "m", 0.0, 0.05, "rotation: turning in place or tight turns"}, {"dy", "m", 0.0, 0.05, "rotation: turning in place or tight turns"}, {"dtheta", "rad", 0.0, 0.05, "straight driving (heading against the direction of travel)"}};
     return kParams;
   }
   template <class T>

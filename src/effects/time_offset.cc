@@ -14,7 +14,7 @@ class TimeOffset final : public EffectImpl<TimeOffset> {
   std::vector<std::string> signature() const override { return {"along:accel", "heading:yaw_accel"}; }
   EffectStage stage() const override { return EffectStage::kControlTiming; }
   const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"delay_s", "s", 0.0, 0.1}};
+    static const std::vector<ParamInfo> kParams = {{"delay_s", "s", 0.0, 0.1, "changes of command: starts, stops, speed and turn-rate changes"}};
     return kParams;
   }
   template <class T>

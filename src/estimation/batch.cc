@@ -37,6 +37,7 @@ class SegmentCost final : public ceres::CostFunction {
                 double** jacobians) const override {
     const bool want_jac = jacobians != nullptr && (jacobians[0] != nullptr || jacobians[1] != nullptr);
     if (!want_jac) return Run<double>(parameters, residuals, nullptr);
+    if (3 + sys_.num_params() <= kBatchJetSize) return Run<BJet>(parameters, residuals, jacobians);
     return Run<Jet>(parameters, residuals, jacobians);
   }
 
@@ -71,7 +72,7 @@ class SegmentCost final : public ceres::CostFunction {
         const T res = whiten_[k](r, 0) * e[0] + whiten_[k](r, 1) * e[1] + whiten_[k](r, 2) * e[2];
         const int row = 3 * static_cast<int>(k) + r;
         residuals[row] = ScalarOf(res);
-        if constexpr (std::is_same_v<T, Jet>) {
+        if constexpr (!std::is_same_v<T, double>) {
           if (jacobians[0] != nullptr) {
             for (int j = 0; j < 3; ++j) jacobians[0][row * 3 + j] = res.v[j];
           }
@@ -86,8 +87,8 @@ class SegmentCost final : public ceres::CostFunction {
 
   template <typename T>
   static T Seed(double value, int slot) {
-    if constexpr (std::is_same_v<T, Jet>) {
-      return Jet(value, slot);
+    if constexpr (!std::is_same_v<T, double>) {
+      return T(value, slot);
     } else {
       (void)slot;
       return value;
@@ -95,6 +96,7 @@ class SegmentCost final : public ceres::CostFunction {
   }
   static double WrapT(double a) { return WrapAngle(a); }
   static Jet WrapT(const Jet& a) { return WrapAngleJet(a); }
+  static BJet WrapT(const BJet& a) { return WrapAngleJet(a); }
 
   const System& sys_;
   const ControlSignal& u_;
@@ -137,6 +139,7 @@ class PriorCost final : public ceres::CostFunction {
 
 struct Problem {
   ceres::Problem problem;
+  std::vector<SegmentCost*> costs;
   std::vector<std::array<double, 3>> starts;
   std::vector<TimeNs> start_ns;
   Eigen::VectorXd params;
@@ -170,6 +173,7 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
     pb->start_ns[g] = groups[g].front()->t_ns;
     const double t0 = controls.ToSeconds(pb->start_ns[g]);
     auto* cost = new SegmentCost(sys, controls, t0, options.warmup_s, groups[g]);
+    pb->costs.push_back(cost);
     pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
   }
   if (options.prior) pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
@@ -189,6 +193,45 @@ bool ComputeCovariance(const Problem& cpb, int np, Eigen::MatrixXd* cov) {
   covariance.GetCovarianceBlock(pb.params.data(), pb.params.data(), c.data());
   *cov = c;
   return cov->allFinite();
+}
+
+// Per-segment Jacobians with the start pose profiled out: H = sum H_s, g_s the profiled
+// gradient of segment s. Model covariance H^-1, cluster-robust H^-1 (sum g g^T) H^-1.
+void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchResult* r) {
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(np, np);
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(np, np);
+  int rows_total = 0;
+  for (size_t g = 0; g < pb.costs.size(); ++g) {
+    SegmentCost* c = pb.costs[g];
+    const int m = c->num_residuals();
+    rows_total += m;
+    Eigen::VectorXd res(m);
+    Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Jx(m, 3), Jp(m, np);
+    const double* params[2] = {pb.starts[g].data(), pb.params.data()};
+    double* jac[2] = {Jx.data(), Jp.data()};
+    c->Evaluate(params, res.data(), jac);
+    const Eigen::Matrix3d A = Jx.transpose() * Jx;
+    Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+    const Eigen::MatrixXd B = Jx.transpose() * Jp;
+    const Eigen::MatrixXd AiB = ldlt.solve(B);
+    H += Jp.transpose() * Jp - B.transpose() * AiB;
+    const Eigen::VectorXd grad = Jp.transpose() * res - AiB.transpose() * (Jx.transpose() * res);
+    M += grad * grad.transpose();
+  }
+  if (options.prior) {
+    H += options.prior->covariance.inverse();
+  }
+  r->information = H;
+  r->num_segments = static_cast<int>(pb.costs.size());
+  r->num_residuals = rows_total;
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
+  if (!lu.isInvertible() || lu.rcond() < 1e-14) return;
+  const Eigen::MatrixXd Hi = lu.inverse();
+  r->profiled_covariance = 0.5 * (Hi + Hi.transpose());
+  const double G = static_cast<double>(pb.costs.size());
+  const double small_sample = G > 1.0 ? G / (G - 1.0) : 1.0;
+  const Eigen::MatrixXd R = Hi * M * Hi * small_sample;
+  r->robust_covariance = 0.5 * (R + R.transpose());
 }
 
 }  // namespace
@@ -271,6 +314,7 @@ BatchResult FitBatch(const System& sys, const ControlSignal& controls,
   if (options.compute_covariance) {
     r.covariance_ok = ComputeCovariance(pb, sys.num_params(), &r.covariance);
   }
+  if (options.profiled_covariance) ProfiledCovariance(pb, sys.num_params(), options, &r);
   return r;
 }
 

@@ -46,6 +46,11 @@ struct BatchOptions {
   std::optional<ParamPrior> prior;
   bool compute_covariance = true;
   int num_threads = 1;
+  // Also compute, from per-segment Jacobians with each segment's start pose profiled out,
+  // the parameter information H, the model-based covariance H^-1 and the cluster-robust
+  // (sandwich) covariance H^-1 (sum_s g_s g_s^T) H^-1 that treats segments as independent
+  // blocks: honest when residuals within a segment are correlated (model error).
+  bool profiled_covariance = false;
   // Effect-state warm-up before each segment start (s); 0 = steady state at the start.
   double warmup_s = 2.0;
   bool IsValid(const System& sys, std::string* error) const;
@@ -56,6 +61,13 @@ struct BatchResult {
   Eigen::MatrixXd covariance;      // their covariance (empty if not computed / singular)
   std::vector<Eigen::Vector3d> segment_start;  // reference pose at each segment start
   std::vector<TimeNs> segment_start_ns;
+  // With profiled_covariance: information over the params (whitened units), H^-1, and
+  // the cluster-robust covariance; empty when H is singular.
+  Eigen::MatrixXd information;
+  Eigen::MatrixXd profiled_covariance;
+  Eigen::MatrixXd robust_covariance;
+  int num_segments = 0;
+  int num_residuals = 0;
   double initial_cost = 0.0;
   double final_cost = 0.0;
   int iterations = 0;

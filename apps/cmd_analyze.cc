@@ -1,0 +1,172 @@
+// kincal analyze: calibrate the declared model on measured data, find the effects it
+// lacks, add them, and report the error before and after.
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+
+#include "commands.h"
+#include "kincal/analysis/analyze.h"
+
+namespace kincal::app {
+namespace {
+
+std::map<std::string, double> ParseInit(const std::string& text) {
+  std::map<std::string, double> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto eq = item.find('=');
+    if (eq == std::string::npos) throw std::runtime_error("--init: expected name=value, got '" + item + "'");
+    try {
+      size_t used = 0;
+      const double v = std::stod(item.substr(eq + 1), &used);
+      if (used != item.size() - eq - 1) throw std::invalid_argument("trailing text");
+      out[item.substr(0, eq)] = v;
+    } catch (const std::exception&) {
+      throw std::runtime_error("--init: '" + item.substr(eq + 1) + "' is not a number (in '" + item + "')");
+    }
+  }
+  return out;
+}
+
+// Finds scripts/plot_analysis.py: $KINCAL_SCRIPTS, the source tree, or the install tree.
+std::string PlotScript() {
+  if (const char* env = std::getenv("KINCAL_SCRIPTS")) return std::string(env) + "/plot_analysis.py";
+  for (const std::string& dir : {std::string(KINCAL_SOURCE_DIR) + "/scripts", std::string(KINCAL_INSTALL_DATADIR) + "/scripts"}) {
+    if (std::filesystem::exists(dir + "/plot_analysis.py")) return dir + "/plot_analysis.py";
+  }
+  return {};
+}
+
+std::string Python() {
+  const std::string venv = std::string(KINCAL_SOURCE_DIR) + "/.venv/bin/python";
+  return std::filesystem::exists(venv) ? venv : "python3";
+}
+
+}  // namespace
+
+Command AddAnalyze(CLI::App& app) {
+  struct Args {
+    std::string model, controls, poses, log, mrclam, out, init, effects = "auto", pose_sigma;
+    int robot = 0;
+    AnalyzeOptions opt;
+  };
+  auto a = std::make_shared<Args>();
+  app.add_option("--model", a->model, "kinematic model (see `kincal models`)");
+  app.add_option("--controls", a->controls, "controls CSV: t,<control names>");
+  app.add_option("--poses", a->poses, "poses CSV: t,x,y,theta");
+  app.add_option("--log", a->log, "a kincald recording (LCM log) instead of CSV files");
+  app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");
+  app.add_option("--robot", a->robot, "MR.CLAM robot number");
+  app.add_option("--out", a->out, "output directory")->required();
+  app.add_option("--init", a->init, "initial guesses, name=value,...");
+  app.add_option("--effects", a->effects, "auto | none | effect,effect[channel],...")->capture_default_str();
+  app.add_option("--fit-fraction", a->opt.fit_fraction, "fraction of the span used for fitting")->capture_default_str();
+  app.add_option("--horizon", a->opt.horizon_s, "open-loop prediction horizon, s")->capture_default_str();
+  app.add_option("--pose-sigma", a->pose_sigma, "pose noise 'pos_m,heading_rad' (default: estimated)");
+  app.add_option("--max-effects", a->opt.max_effects, "at most this many effects")->capture_default_str();
+  app.add_option("--threads", a->opt.num_threads, "solver threads")->capture_default_str();
+  return [a]() -> int {
+    AnalyzeOptions o = a->opt;
+    if (!a->mrclam.empty()) {
+      if (a->model.empty()) a->model = "unicycle";
+      if (a->robot < 1) throw std::runtime_error("--mrclam needs --robot N (1..5 in dataset 6)");
+    }
+    if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
+    o.model = a->model;
+    o.init = a->init.empty() ? std::map<std::string, double>{} : ParseInit(a->init);
+    if (a->effects == "auto" || a->effects == "none") {
+      o.effects_mode = a->effects;
+    } else {
+      o.effects_mode = "list";
+      std::string cur;
+      int depth = 0;
+      for (char c : a->effects + ",") {
+        if (c == '[') ++depth;
+        if (c == ']') --depth;
+        if (c == ',' && depth == 0) {
+          if (!cur.empty()) o.effects.push_back(cur);
+          cur.clear();
+        } else {
+          cur += c;
+        }
+      }
+    }
+    if (!a->pose_sigma.empty()) {
+      const auto comma = a->pose_sigma.find(',');
+      if (comma == std::string::npos) throw std::runtime_error("--pose-sigma: expected 'pos_m,heading_rad'");
+      o.pose_sigma = Eigen::Vector2d(std::stod(a->pose_sigma.substr(0, comma)), std::stod(a->pose_sigma.substr(comma + 1)));
+    }
+    const auto model = MakeModel(o.model);
+    Recording rec;
+    const int sources = !a->mrclam.empty() + !a->log.empty() + (!a->controls.empty() || !a->poses.empty());
+    if (sources != 1) throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
+    if (!a->mrclam.empty()) {
+      if (o.model != "unicycle") throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
+      rec = ReadMrclam(a->mrclam, a->robot);
+    } else if (!a->log.empty()) {
+      rec = ReadLcmLog(a->log, *model);
+    } else {
+      if (a->controls.empty() || a->poses.empty()) throw std::runtime_error("--controls and --poses go together");
+      rec = ReadCsvRecording(a->controls, a->poses, *model);
+    }
+    std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
+              << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
+              << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
+    const bool tty = isatty(STDERR_FILENO);
+    o.progress = [tty](double f, const std::string& stage) {
+      const int width = 30;
+      const int filled = static_cast<int>(f * width);
+      if (tty) {
+        std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#')
+                  << std::string(static_cast<size_t>(width - filled), ' ') << "] " << std::setw(3)
+                  << static_cast<int>(f * 100) << "% " << std::left << std::setw(40) << stage.substr(0, 40)
+                  << std::right << std::flush;
+        if (f >= 1.0) std::cerr << "\n";
+      } else {
+        static std::string last;
+        if (stage.substr(0, 8) != last.substr(0, 8)) std::cerr << "[" << static_cast<int>(f * 100) << "%] " << stage << "\n";
+        last = stage;
+      }
+    };
+    const AnalyzeResult r = Analyze(rec, o);
+    WriteAnalysisReport(r, a->out);
+    // Plots from the report's data (matplotlib); the report stands without them.
+    const std::string script = PlotScript();
+    if (!script.empty()) {
+      const std::string cmd = Python() + " " + script + " " + a->out + " >/dev/null";
+      if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed (" << cmd << ")\n";
+    } else {
+      std::cerr << "warning: scripts/plot_analysis.py not found: no PNG plots\n";
+    }
+    std::cout << std::setprecision(4);
+    std::cout << "\nmodel " << r.model << ", residual weights " << r.pose_sigma[0] << " m / "
+              << r.pose_sigma[1] << " rad" << (r.pose_sigma_estimated ? " (estimated)" : "") << "\n";
+    std::cout << std::left << std::setw(28) << "" << std::setw(16) << "before" << "after\n";
+    auto row = [](const std::string& n, double b, double af) {
+      std::cout << std::left << std::setw(28) << n << std::setw(16) << b << af << "\n";
+    };
+    row("fit position RMS [m]", r.before.fit.pos_rms_m, r.after.fit.pos_rms_m);
+    row("fit heading RMS [rad]", r.before.fit.heading_rms_rad, r.after.fit.heading_rms_rad);
+    row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
+    row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad, r.after.heldout.heading_rms_rad);
+    std::cout << std::right << "parameters after:\n";
+    for (const auto& p : r.after.params) {
+      std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12) << p.value
+                << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
+    }
+    std::cout << "effects accepted:";
+    for (const auto& e : r.after.effects) std::cout << " " << e;
+    if (r.after.effects.empty()) std::cout << " none";
+    std::cout << "\n";
+    if (!r.before.unique) std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
+    for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
+    std::cout << "wrote " << a->out << "/report.json, report.html, residuals.csv\n";
+    return 0;
+  };
+}
+
+}  // namespace kincal::app

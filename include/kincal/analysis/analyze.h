@@ -1,0 +1,135 @@
+// Closing the loop: find what the kinematic model lacks in measured data.
+//
+// Analyze() fits the declared model to the first `fit_fraction` of a recording (batch
+// maximum likelihood over non-overlapping prediction windows, staged and multi-start so
+// that initial guesses off by a factor of five still reach the global optimum), measures
+// the open-loop prediction residual over `horizon_s` from every measured pose on the fit
+// part and on the held-out rest, diagnoses the residual (correlations with speed, turn
+// rate, command changes..., whiteness, bias), then tries every candidate effect, keeps
+// the one that improves the held-out error most and is supported by an information
+// criterion, and repeats until nothing helps.
+//
+// Correlated residuals: the information criterion counts one observation per
+// non-overlapping window, and every sigma is the cluster-robust (sandwich) covariance
+// over windows, so neither is overconfident when prediction errors within a window are
+// correlated.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "kincal/io/recording.h"
+
+namespace kincal {
+
+class AnalysisError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct AnalyzeOptions {
+  std::string model;
+  std::map<std::string, double> init;     // initial guesses by parameter name
+  std::string effects_mode = "auto";      // "auto", "none" or "list"
+  std::vector<std::string> effects;       // candidate specs when effects_mode == "list"
+  double fit_fraction = 0.7;              // first part of the time span used for fitting
+  double horizon_s = 1.0;                 // open-loop prediction horizon
+  // Pose noise (position m, heading rad) weighting the residuals; estimated from the
+  // data (second differences) when not given.
+  std::optional<Eigen::Vector2d> pose_sigma;
+  int max_fit_windows = 250;    // non-overlapping windows used by the fits
+  int max_eval_windows = 4000;  // windows (from measured poses) for the residual metrics
+  int poses_per_window = 8;     // measurements used inside each fit window
+  double min_gain = 0.02;       // held-out improvement needed to accept an effect
+  int max_effects = 4;
+  uint64_t seed = 1;
+  int num_threads = 1;
+  std::function<void(double fraction, const std::string& stage)> progress;
+  bool IsValid(std::string* error) const;
+};
+
+struct ParamEstimate {
+  std::string name;
+  std::string unit;
+  double value = 0.0;
+  double sigma = 0.0;        // cluster-robust 1-sigma
+  double sigma_model = 0.0;  // model-based 1-sigma (white-residual assumption)
+};
+
+struct ErrorStats {
+  double pos_rms_m = 0.0;
+  double heading_rms_rad = 0.0;
+  int windows = 0;
+};
+
+struct FitReport {
+  std::vector<std::string> effects;  // effect specs in the model
+  std::vector<ParamEstimate> params;
+  ErrorStats fit, heldout;
+  double cost = 0.0;  // sum of squared whitened residuals over the fit windows
+  int fit_windows = 0;
+  bool unique = true;
+  std::string uniqueness;                // explanation when not unique
+  std::vector<std::string> unobservable;  // messages
+};
+
+struct DiagnosisTerm {
+  std::string component;  // along, cross, heading
+  std::string regressor;
+  double r = 0.0;  // correlation over windows
+  double z = 0.0;  // r * sqrt(effective number of independent windows)
+};
+
+struct ResidualTests {
+  double bias_z[3] = {0, 0, 0};       // mean / standard error (along, cross, heading)
+  double lag1_autocorr[3] = {0, 0, 0};
+  double ljung_box_p[3] = {1, 1, 1};  // whiteness over 10 lags (non-overlapping windows)
+};
+
+struct EffectTrial {
+  std::string name;   // effect spec
+  int round = 0;
+  bool accepted = false;
+  std::vector<ParamEstimate> params;  // the effect's own parameters
+  double heldout_gain = 0.0;   // 1 - heldout pos RMS with / without
+  double combined_gain = 0.0;  // same for the noise-weighted position+heading error
+  double delta_bic = 0.0;
+  double signature_z = 0.0;    // strength of its residual signature before the round
+  std::string evidence;
+};
+
+struct ResidualPoint {
+  double t_s;  // window start, seconds since the recording origin
+  bool heldout;
+  double along, cross, heading;  // prediction error at the horizon (body frame), m, m, rad
+};
+
+struct AnalyzeResult {
+  std::string model;
+  std::string source;
+  Eigen::Vector2d pose_sigma{0, 0};  // weights used (m, rad)
+  bool pose_sigma_estimated = true;
+  double t_begin_s = 0, t_split_s = 0, t_end_s = 0;
+  double horizon_s = 1.0;
+  FitReport before, after;
+  std::vector<EffectTrial> trials;
+  std::vector<DiagnosisTerm> diagnosis_before, diagnosis_after;
+  ResidualTests tests_before, tests_after;
+  // Residual series per selection step: "before", then "+<effect>" for each accepted one.
+  std::vector<std::pair<std::string, std::vector<ResidualPoint>>> residual_steps;
+  std::vector<std::string> warnings;
+  RecordingStats stats;
+};
+
+AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& options);
+
+// Writes DIR/report.json, DIR/residuals.csv and DIR/report.html (which shows the PNGs
+// that scripts/plot_analysis.py draws from those files).
+void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir);
+
+}  // namespace kincal
