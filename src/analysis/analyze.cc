@@ -393,6 +393,7 @@ struct Fit {
   Eigen::VectorXd p;
   Eigen::MatrixXd cov_robust, cov_model, info;
   double cost = 0.0;
+  double n_eff = 0.0;  // effective number of independent residuals
   bool ok = false;
 };
 
@@ -412,6 +413,7 @@ Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeas
     f.cov_robust = r.robust_covariance;
     f.cov_model = r.profiled_covariance;
     f.info = r.information;
+    f.n_eff = r.effective_residuals;
   } catch (const std::exception&) {
     f.ok = false;
   }
@@ -711,7 +713,12 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
       t.fit = best;
       t.eval = Evaluate(*sys, best.p, d);
       const int k = np - old_np;
-      t.trial.delta_bic = nw * std::log(std::max(best.cost, 1e-300) / std::max(current.cost, 1e-300)) + k * std::log(nw);
+      // Quasi-BIC: residuals within a window are correlated, so the sample size is the
+      // effective number of independent residuals (AR(1) design effect of the larger
+      // model, never fewer than one per window).
+      const double n_eff = std::max(nw, best.n_eff);
+      t.trial.delta_bic = n_eff * std::log(std::max(best.cost, 1e-300) / std::max(current.cost, 1e-300)) +
+                          k * std::log(n_eff);
       t.trial.heldout_gain = 1.0 - t.eval.held.pos_rms_m / std::max(current_eval.held.pos_rms_m, 1e-300);
       t.trial.combined_gain = 1.0 - Combined(t.eval.held, d.sigma) / std::max(Combined(current_eval.held, d.sigma), 1e-300);
       t.trial.params = Estimates(*sys, best, old_np, np);

@@ -2,6 +2,7 @@
 // command u has taken up the play of total width `backlash`:
 //   u > s + backlash/2  ->  s = u - backlash/2;   u < s - backlash/2  ->  s = u + backlash/2
 // Acts on the model's steering channel, in that channel's unit; s is an internal state.
+// A negative width acts as zero, so the parameter has one sign and fits cannot flip it.
 #include "kincal/effect.h"
 
 namespace kincal {
@@ -41,7 +42,7 @@ class Backlash final : public EffectImpl<Backlash> {
   }
   template <class T>
   void AdvanceT(const T* p, const T&, T* s, T* u) const {
-    const T half = (ScalarOf(p[0]) >= 0.0 ? p[0] : -p[0]) * 0.5;
+    const T half = (ScalarOf(p[0]) >= 0.0 ? p[0] : T(0.0)) * 0.5;
     const T& cmd = u[channel_];
     if (ScalarOf(cmd) > ScalarOf(s[0] + half)) {
       s[0] = cmd - half;

@@ -1,6 +1,7 @@
 // dead_band: commands smaller than a threshold produce no motion, larger ones are
 // reduced by it:  u' = sign(u) max(|u| - band, 0). One parameter `band_<channel>` (in the
-// channel's unit) per channel (default: every channel).
+// channel's unit) per channel (default: every channel). A negative band acts as zero, so
+// the parameter has one sign and fits cannot flip it.
 #include "kincal/effect.h"
 
 namespace kincal {
@@ -31,12 +32,12 @@ class DeadBand final : public EffectImpl<DeadBand> {
   void MapControlsT(const T* p, T* u) const {
     for (size_t k = 0; k < channels_.size(); ++k) {
       T& v = u[channels_[k]];
+      if (ScalarOf(p[k]) <= 0.0) continue;
       const double a = ScalarOf(v);
-      const double b = ScalarOf(p[k]);
-      if (std::abs(a) <= std::abs(b)) {
+      if (std::abs(a) <= ScalarOf(p[k])) {
         v = T(0.0);
       } else {
-        v = a > 0.0 ? v - (b >= 0.0 ? p[k] : -p[k]) : v + (b >= 0.0 ? p[k] : -p[k]);
+        v = a > 0.0 ? v - p[k] : v + p[k];
       }
     }
   }

@@ -2,6 +2,7 @@
 
 #include <ceres/ceres.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -201,6 +202,7 @@ void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchR
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(np, np);
   Eigen::MatrixXd M = Eigen::MatrixXd::Zero(np, np);
   int rows_total = 0;
+  double sum_sq = 0.0, sum_lag = 0.0;
   for (size_t g = 0; g < pb.costs.size(); ++g) {
     SegmentCost* c = pb.costs[g];
     const int m = c->num_residuals();
@@ -210,6 +212,8 @@ void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchR
     const double* params[2] = {pb.starts[g].data(), pb.params.data()};
     double* jac[2] = {Jx.data(), Jp.data()};
     c->Evaluate(params, res.data(), jac);
+    sum_sq += res.squaredNorm();
+    for (int i = 3; i < m; ++i) sum_lag += res[i] * res[i - 3];
     const Eigen::Matrix3d A = Jx.transpose() * Jx;
     Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
     const Eigen::MatrixXd B = Jx.transpose() * Jp;
@@ -224,9 +228,17 @@ void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchR
   r->information = H;
   r->num_segments = static_cast<int>(pb.costs.size());
   r->num_residuals = rows_total;
-  Eigen::FullPivLU<Eigen::MatrixXd> lu(H);
-  if (!lu.isInvertible() || lu.rcond() < 1e-14) return;
-  const Eigen::MatrixXd Hi = lu.inverse();
+  const double rho = sum_sq > 0.0 ? std::clamp(sum_lag / sum_sq, 0.0, 0.999) : 0.0;
+  r->residual_lag1 = rho;
+  r->effective_residuals =
+      std::max(static_cast<double>(r->num_segments), rows_total * (1.0 - rho) / (1.0 + rho));
+  // Invert in scaled coordinates (unit diagonal): parameters of very different units
+  // (ticks, metres per tick) must not look singular.
+  const Eigen::VectorXd d = H.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd Hs = d.asDiagonal() * H * d.asDiagonal();
+  Eigen::FullPivLU<Eigen::MatrixXd> lu(Hs);
+  if (!lu.isInvertible() || lu.rcond() < 1e-12) return;
+  const Eigen::MatrixXd Hi = d.asDiagonal() * lu.inverse() * d.asDiagonal();
   r->profiled_covariance = 0.5 * (Hi + Hi.transpose());
   const double G = static_cast<double>(pb.costs.size());
   const double small_sample = G > 1.0 ? G / (G - 1.0) : 1.0;

@@ -9,10 +9,11 @@
 // the one that improves the held-out error most and is supported by an information
 // criterion, and repeats until nothing helps.
 //
-// Correlated residuals: the information criterion counts one observation per
-// non-overlapping window, and every sigma is the cluster-robust (sandwich) covariance
-// over windows, so neither is overconfident when prediction errors within a window are
-// correlated.
+// Correlated residuals: the information criterion counts the effective number of
+// independent residuals (windows never overlap; within a window the AR(1) design effect of
+// the residuals shrinks the count, to one per window at worst), and every sigma is the
+// cluster-robust (sandwich) covariance over windows, so neither is overconfident when
+// prediction errors within a window are correlated.
 #pragma once
 
 #include <Eigen/Core>

@@ -68,6 +68,11 @@ struct BatchResult {
   Eigen::MatrixXd robust_covariance;
   int num_segments = 0;
   int num_residuals = 0;
+  // Pooled lag-1 autocorrelation of each residual component along the measurements of a
+  // segment, and the effective number of independent residuals it implies (AR(1) design
+  // effect, at least one per segment).
+  double residual_lag1 = 0.0;
+  double effective_residuals = 0.0;
   double initial_cost = 0.0;
   double final_cost = 0.0;
   int iterations = 0;
