@@ -161,3 +161,33 @@ TEST(Clean, NoEffectIsInventedOnCleanData) {
 
 }  // namespace
 }  // namespace kincal
+
+namespace kincal {
+namespace {
+
+TEST(Baseline, GuessesOffByFiveStillReachTheGlobalOptimum) {
+  for (int m : {0, 1, 3}) {
+    const auto sc = AllModelScenarios()[static_cast<size_t>(m)];
+    const Recording rec = SimulateRecording({m, {}, 11}, 60.0);
+    AnalyzeOptions o = FastOptions(sc.model);
+    o.effects_mode = "none";
+    const System sys = MakeSystem(sc.model);
+    for (double factor : {5.0, 0.2}) {
+      o.init.clear();
+      for (int i = 0; i < sys.num_params(); ++i) {
+        const auto& p = sys.params()[static_cast<size_t>(i)];
+        o.init[p.name] = sc.truth[static_cast<size_t>(i)] == 0.0 ? 0.0 : sc.truth[static_cast<size_t>(i)] * factor;
+      }
+      const AnalyzeResult r = Analyze(rec, o);
+      for (int i = 0; i < sys.num_params(); ++i) {
+        const auto& p = r.before.params[static_cast<size_t>(i)];
+        EXPECT_LE(std::abs(p.value - sc.truth[static_cast<size_t>(i)]), 3.0 * p.sigma)
+            << sc.model << " x" << factor << " " << p.name << " = " << p.value << " +- " << p.sigma;
+      }
+      EXPECT_TRUE(r.before.unique) << r.before.uniqueness;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kincal

@@ -8,6 +8,7 @@
 #include <ceres/jet.h>
 
 #include <Eigen/Dense>
+#include <limits>
 #include <string>
 
 namespace kincal {
@@ -55,6 +56,8 @@ struct ParamInfo {
   double default_value;  // generic initial guess for an unknown robot
   double default_sigma;  // 1-sigma of that guess, same unit
   std::string excitation = {};  // what motion identifies it (for "unobservable" messages)
+  // Physical lower bound (e.g. a length > 0), enforced by the batch fits; -inf if none.
+  double min_value = -std::numeric_limits<double>::infinity();
 };
 
 // Describes one control channel.

@@ -618,6 +618,8 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   } catch (const std::exception& e) {
     throw AnalysisError(e.what());
   }
+  const System bare(model);
+  const Eigen::VectorXd p0 = InitialParams(bare, o.init);  // rejects unknown names first
   Dataset d = Prepare(rec, o, &res.warnings);
   res.pose_sigma = d.sigma;
   res.pose_sigma_estimated = !o.pose_sigma.has_value();
@@ -627,8 +629,6 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
 
   // 1. Baseline.
   progress(0.02, "baseline");
-  const System bare(model);
-  const Eigen::VectorXd p0 = InitialParams(bare, o.init);
   FitReport base_report;
   Fit base = FitBaseline(bare, d, p0, o, &base_report);
   ComputeFeatures(&d, bare, base.p);

@@ -15,7 +15,7 @@ constexpr const char* kHint = "changes of command: starts, stops, accelerations"
 
 class ActuatorLag final : public EffectImpl<ActuatorLag> {
  public:
-  ActuatorLag() : params_{{"tau_s", "s", 0.1, 0.1, kHint}} {}
+  ActuatorLag() : params_{{"tau_s", "s", 0.1, 0.1, kHint, 0.0}} {}
   std::string_view name() const override { return "actuator_lag"; }
   std::string_view description() const override {
     return "first-order lag tau_s between commanded and realised control";
@@ -34,11 +34,11 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
     shared_ = channels.empty();
     params_.clear();
     if (shared_) {
-      params_.push_back({"tau_s", "s", 0.1, 0.1, kHint});
+      params_.push_back({"tau_s", "s", 0.1, 0.1, kHint, 0.0});
     } else {
       for (int c : channels_) {
         params_.push_back(
-            {"tau_s_" + model.controls()[static_cast<size_t>(c)].name, "s", 0.1, 0.1, kHint});
+            {"tau_s_" + model.controls()[static_cast<size_t>(c)].name, "s", 0.1, 0.1, kHint, 0.0});
       }
     }
     return true;

@@ -178,6 +178,14 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
     pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
   }
   if (options.prior) pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
+  // Physical bounds (lengths > 0, time constants >= 0).
+  for (int i = 0; i < sys.num_params(); ++i) {
+    const double lo = sys.params()[static_cast<size_t>(i)].min_value;
+    if (std::isfinite(lo)) {
+      pb->params[i] = std::max(pb->params[i], lo);
+      pb->problem.SetParameterLowerBound(pb->params.data(), i, lo);
+    }
+  }
 }
 
 bool ComputeCovariance(const Problem& cpb, int np, Eigen::MatrixXd* cov) {
