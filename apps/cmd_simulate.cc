@@ -4,6 +4,7 @@
 // history as CSV (t_s,name,value,sigma,truth) for scripts/plot_convergence.py.
 #include <yaml-cpp/yaml.h>
 
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
@@ -130,6 +131,7 @@ Command AddSimulate(CLI::App& app) {
     double duration_s = 0.0;
     uint64_t seed = 0;
     std::string filter;
+    std::string export_dir;
   };
   auto args = std::make_shared<Args>();
   app.add_option("--config", args->config, "scenario YAML")->capture_default_str();
@@ -137,6 +139,9 @@ Command AddSimulate(CLI::App& app) {
   app.add_option("--duration", args->duration_s, "override duration_s");
   app.add_option("--seed", args->seed, "override seed");
   app.add_option("--filter", args->filter, "override filter (dd2, ekf, ukf)");
+  app.add_option("--export", args->export_dir,
+                 "write the simulated recording as DIR/controls.csv and DIR/poses.csv "
+                 "(input for `kincal analyze`)");
   return [args]() -> int {
     Scenario sc = LoadScenario(args->config);
     if (args->duration_s > 0.0) sc.duration_s = args->duration_s;
@@ -172,6 +177,22 @@ Command AddSimulate(CLI::App& app) {
     const Eigen::Matrix3d R = sc.pose_sigma.array().square().matrix().asDiagonal();
     const auto meas = MeasurePoses(traj, R, 0, rng);
 
+    if (!args->export_dir.empty()) {
+      std::filesystem::create_directories(args->export_dir);
+      std::ofstream c(args->export_dir + "/controls.csv"), p(args->export_dir + "/poses.csv");
+      if (!c || !p) throw std::runtime_error("cannot write to " + args->export_dir);
+      c << "t";
+      for (const auto& ch : truth_sys.model().controls()) c << "," << ch.name;
+      c << "\n" << std::setprecision(10);
+      for (size_t i = 0; i < cmd.size(); ++i) {
+        c << cmd.TimeAt(static_cast<int>(i));
+        for (int k = 0; k < nc; ++k) c << "," << cmd.ValuesAt(static_cast<int>(i))[static_cast<size_t>(k)];
+        c << "\n";
+      }
+      p << "t,x,y,theta\n" << std::setprecision(10);
+      for (const auto& m : meas) p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
+      std::cout << "wrote " << args->export_dir << "/controls.csv and poses.csv\n";
+    }
     OnlineCalibratorOptions opt;
     opt.filter = sc.filter;
     opt.noise.control_psd = sc.control_psd;

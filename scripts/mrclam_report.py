@@ -2,9 +2,10 @@
 """Run `kincal analyze` on every robot of UTIAS MR.CLAM dataset 6 and write the results
 page docs/mrclam.md (tables from the tool's own report.json files, plots copied next to it).
 
-Usage: mrclam_report.py [DATASET_DIR] [OUT_DIR]
+Usage: mrclam_report.py [--reuse] [DATASET_DIR] [OUT_DIR]
   DATASET_DIR defaults to ../shared/data/mrclam/dataset6 beside the repository;
-  OUT_DIR (the analyze outputs) defaults to out/mrclam.
+  OUT_DIR (the analyze outputs) defaults to out/mrclam; --reuse regenerates the page from
+  reports already in OUT_DIR.
 """
 import json
 import os
@@ -24,8 +25,10 @@ def fmt(v, s=None, digits=3):
 
 
 def main() -> int:
-    data = sys.argv[1] if len(sys.argv) > 1 else os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6")
-    out = sys.argv[2] if len(sys.argv) > 2 else os.path.join(ROOT, "out", "mrclam")
+    args = [a for a in sys.argv[1:] if a != "--reuse"]
+    reuse = "--reuse" in sys.argv[1:]
+    data = args[0] if len(args) > 0 else os.path.join(ROOT, "..", "shared", "data", "mrclam", "dataset6")
+    out = args[1] if len(args) > 1 else os.path.join(ROOT, "out", "mrclam")
     if not os.path.isdir(data):
         print(f"{data}: no such dataset directory", file=sys.stderr)
         return 1
@@ -36,8 +39,9 @@ def main() -> int:
     for robot in range(1, 6):
         d = os.path.join(out, f"robot{robot}")
         print(f"== robot {robot}", flush=True)
-        subprocess.run([kincal, "analyze", "--mrclam", data, "--robot", str(robot), "--out", d,
-                        "--threads", "2"], check=True)
+        if not (reuse and os.path.exists(os.path.join(d, "report.json"))):
+            subprocess.run([kincal, "analyze", "--mrclam", data, "--robot", str(robot), "--out", d,
+                            "--threads", "2"], check=True)
         with open(os.path.join(d, "report.json")) as f:
             reports[robot] = json.load(f)
         for png in ("residuals_time.png",):
@@ -77,6 +81,42 @@ def main() -> int:
     lines += ["", "Before (bare model): " + "; ".join(
         f"robot {robot}: " + ", ".join(f"{n} {fmt(p['value'], p['sigma'])}" for n, p in r["before"]["params"].items())
         for robot, r in reports.items()), ""]
+    # Findings, computed from the reports.
+    accepted, fit_only = {}, {}
+    for robot, r in reports.items():
+        for e in r["effects"]:
+            name = e["name"]
+            if e["accepted"]:
+                accepted.setdefault(name, set()).add(robot)
+            elif e["delta_bic"] < 0 and e["combined_gain"] < 0:
+                fit_only.setdefault(name, set()).add(robot)
+    timing = [r["after"]["params"].get("delay_s", r["after"]["params"].get("tau_s", {})).get("value")
+              for r in reports.values()]
+    slow = [r["after"]["params"]["c_slow"]["value"] for r in reports.values() if "c_slow" in r["after"]["params"]]
+    gains = [1 - r["after"]["heldout"]["pos_rms_m"] / r["before"]["heldout"]["pos_rms_m"] for r in reports.values()]
+    kv_b = [r["before"]["params"]["k_v"]["value"] for r in reports.values()]
+    kv_a = [r["after"]["params"]["k_v"]["value"] for r in reports.values()]
+    lines += ["## Findings", ""]
+    lines.append("- Effects accepted: " + "; ".join(
+        f"{n} on {len(rs)} of {len(reports)} robots" for n, rs in sorted(accepted.items(), key=lambda kv: -len(kv[1]))) + ".")
+    t = [x for x in timing if x is not None]
+    if t:
+        lines.append(f"- The motion follows the commands late: a delay or first-order lag of "
+                     f"{min(t):.2f}–{max(t):.2f} s (the two fit about equally well; each robot's data picks one).")
+    if slow:
+        lines.append(f"- The robots lose forward speed while turning: v' = v / (1 + c_slow |ω|) with c_slow "
+                     f"{min(slow):.2f}–{max(slow):.2f} s/rad, i.e. about {100*(1-1/(1+min(slow)*0.3)):.0f}–"
+                     f"{100*(1-1/(1+max(slow)*0.3)):.0f} % less speed at 0.3 rad/s. This is the strongest residual "
+                     f"signature of the bare model (along-track error against |turn rate|).")
+        lines.append(f"- With it, the realised speed gain k_v moves from {min(kv_b):.2f}–{max(kv_b):.2f} to "
+                     f"{min(kv_a):.2f}–{max(kv_a):.2f}: most of the apparent speed deficit of the bare model was "
+                     f"speed lost in turns.")
+    lines.append(f"- Held-out 1 s position error drops by {100*min(gains):.0f}–{100*max(gains):.0f} %.")
+    if fit_only:
+        lines.append("- Supported on the fit part but worse on the held-out part, hence rejected: " + "; ".join(
+            f"{n} (robots {', '.join(map(str, sorted(rs)))})" for n, rs in sorted(fit_only.items())) +
+            ". A sign-dependent turn gain fits the first 70 % of some runs but does not carry over.")
+    lines.append("")
     lines += ["## Evidence", "",
               "Each accepted effect improved the held-out error and was supported by the quasi-BIC;",
               "the strongest residual correlations of the bare model were:", ""]
