@@ -41,37 +41,11 @@ bool BindChannels(const KinematicModel& model, const std::vector<std::string>& r
   return true;
 }
 
-EffectRegistry& EffectRegistry::Instance() {
-  static EffectRegistry registry;
-  return registry;
-}
-
-bool EffectRegistry::Register(std::string name, Factory f) {
-  factories_.emplace_back(std::move(name), std::move(f));
-  return true;
-}
-
-std::unique_ptr<Effect> EffectRegistry::Create(std::string_view name) const {
-  for (const auto& [n, f] : factories_) {
-    if (n == name) return f();
-  }
-  return nullptr;
-}
-
-std::vector<std::string> EffectRegistry::Names() const {
-  std::vector<std::string> names;
-  for (const auto& entry : factories_) names.push_back(entry.first);
-  return names;
-}
-
 std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
   auto e = EffectRegistry::Instance().Create(spec.name);
   if (!e) {
-    std::string known;
-    for (const auto& n : EffectRegistry::Instance().Names()) {
-      known += (known.empty() ? "" : ", ") + n;
-    }
-    throw std::invalid_argument("unknown effect '" + spec.name + "' (known: " + known + ")");
+    throw std::invalid_argument("unknown effect '" + spec.name +
+                                "' (known: " + EffectRegistry::Instance().KnownList() + ")");
   }
   if (!e->AppliesTo(model)) {
     throw std::invalid_argument("effect '" + spec.name + "' does not apply to model '" +

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "kincal/model.h"
+#include "kincal/registry.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -181,17 +182,7 @@ class EffectImpl : public Effect {
   const Derived& self() const { return *static_cast<const Derived*>(this); }
 };
 
-class EffectRegistry {
- public:
-  using Factory = std::function<std::unique_ptr<Effect>()>;
-  static EffectRegistry& Instance();
-  bool Register(std::string name, Factory f);
-  std::unique_ptr<Effect> Create(std::string_view name) const;
-  std::vector<std::string> Names() const;
-
- private:
-  std::vector<std::pair<std::string, Factory>> factories_;
-};
+using EffectRegistry = Registry<Effect>;
 
 // Creates and binds an effect; throws std::invalid_argument with a clear message when the
 // name is unknown, the effect does not apply to the model, or the channels are invalid.

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "kincal/registry.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -72,19 +73,7 @@ class ModelImpl : public KinematicModel {
   }
 };
 
-// Registry of models by name.
-class ModelRegistry {
- public:
-  using Factory = std::function<std::unique_ptr<KinematicModel>()>;
-  static ModelRegistry& Instance();
-  bool Register(std::string name, Factory f);
-  // nullptr if unknown.
-  std::unique_ptr<KinematicModel> Create(std::string_view name) const;
-  std::vector<std::string> Names() const;
-
- private:
-  std::vector<std::pair<std::string, Factory>> factories_;
-};
+using ModelRegistry = Registry<KinematicModel>;
 
 // Convenience: throws std::invalid_argument naming the known models if `name` is unknown.
 std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);

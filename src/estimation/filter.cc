@@ -51,35 +51,11 @@ void MeasurementFunction::Jacobian(const StateVec& x, MeasStateMat* H) const {
   }
 }
 
-FilterRegistry& FilterRegistry::Instance() {
-  static FilterRegistry registry;
-  return registry;
-}
-
-bool FilterRegistry::Register(std::string name, Factory f) {
-  factories_.emplace_back(std::move(name), std::move(f));
-  return true;
-}
-
-std::unique_ptr<Filter> FilterRegistry::Create(std::string_view name) const {
-  for (const auto& [n, f] : factories_) {
-    if (n == name) return f();
-  }
-  return nullptr;
-}
-
-std::vector<std::string> FilterRegistry::Names() const {
-  std::vector<std::string> names;
-  for (const auto& entry : factories_) names.push_back(entry.first);
-  return names;
-}
-
 std::unique_ptr<Filter> MakeFilter(std::string_view name) {
   auto f = FilterRegistry::Instance().Create(name);
   if (!f) {
-    std::string known;
-    for (const auto& n : FilterRegistry::Instance().Names()) known += (known.empty() ? "" : ", ") + n;
-    throw std::invalid_argument("unknown filter '" + std::string(name) + "' (known: " + known + ")");
+    throw std::invalid_argument("unknown filter '" + std::string(name) +
+                                "' (known: " + FilterRegistry::Instance().KnownList() + ")");
   }
   return f;
 }

@@ -18,6 +18,7 @@
 #include <string_view>
 #include <vector>
 
+#include "kincal/registry.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -67,17 +68,7 @@ class Filter {
   virtual StateMat covariance() const = 0;
 };
 
-class FilterRegistry {
- public:
-  using Factory = std::function<std::unique_ptr<Filter>()>;
-  static FilterRegistry& Instance();
-  bool Register(std::string name, Factory f);
-  std::unique_ptr<Filter> Create(std::string_view name) const;
-  std::vector<std::string> Names() const;
-
- private:
-  std::vector<std::pair<std::string, Factory>> factories_;
-};
+using FilterRegistry = Registry<Filter>;
 
 // Throws std::invalid_argument naming the known filters if `name` is unknown.
 std::unique_ptr<Filter> MakeFilter(std::string_view name);

@@ -1,0 +1,50 @@
+// Registry<Base>: named factories for the pluggable parts (models, effects, filters).
+// Each implementation file registers itself with one line; nothing else lists them.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace kincal {
+
+template <typename Base>
+class Registry {
+ public:
+  using Factory = std::function<std::unique_ptr<Base>()>;
+
+  static Registry& Instance() {
+    static Registry registry;
+    return registry;
+  }
+  bool Register(std::string name, Factory f) {
+    factories_.emplace_back(std::move(name), std::move(f));
+    return true;
+  }
+  // nullptr if unknown.
+  std::unique_ptr<Base> Create(std::string_view name) const {
+    for (const auto& [n, f] : factories_) {
+      if (n == name) return f();
+    }
+    return nullptr;
+  }
+  std::vector<std::string> Names() const {
+    std::vector<std::string> names;
+    for (const auto& entry : factories_) names.push_back(entry.first);
+    return names;
+  }
+  // "a, b, c": for error messages naming what is known.
+  std::string KnownList() const {
+    std::string known;
+    for (const auto& entry : factories_) known += (known.empty() ? "" : ", ") + entry.first;
+    return known;
+  }
+
+ private:
+  std::vector<std::pair<std::string, Factory>> factories_;
+};
+
+}  // namespace kincal
