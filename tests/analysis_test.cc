@@ -191,3 +191,22 @@ TEST(Baseline, GuessesOffByFiveStillReachTheGlobalOptimum) {
 
 }  // namespace
 }  // namespace kincal
+
+namespace kincal {
+namespace {
+
+TEST(Timing, ClockOffsetOfSecondsIsFound) {
+  // The robot's clock runs 1.7 s behind the camera's: far outside the basin of a local fit.
+  const Case c{1, {{"time_offset", {{"delay_s", 1.7}}}}, 4};
+  const AnalyzeResult r = Analyze(SimulateRecording(c, 120.0), FastOptions("unicycle"));
+  ASSERT_FALSE(r.after.effects.empty());
+  EXPECT_EQ(r.after.effects.front(), "time_offset");
+  for (const auto& p : r.after.params) {
+    if (p.name == "delay_s") {
+      EXPECT_NEAR(p.value, 1.7, 3.0 * p.sigma);
+    }
+  }
+}
+
+}  // namespace
+}  // namespace kincal

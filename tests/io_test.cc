@@ -79,6 +79,14 @@ TEST_F(Io, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   EXPECT_NEAR(r.poses[0].z.z(), 0.1, 1e-15);
 }
 
+TEST_F(Io, HeadingInDegreesIsFlagged) {
+  const Recording r = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
+                                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"),
+                                       *MakeModel("unicycle"));
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos) << r.warnings[0];
+}
+
 TEST_F(Io, MrclamCommentsAndMissingFile) {
   const std::string d = dir_.string();
   Write("Robot1_Odometry.dat", "# comment\n10.0 0.1 0.0\n10.5 0.1 0.2\n");

@@ -243,6 +243,58 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
   }
 }
 
+// Lag (s) by which the measured motion follows the commanded one, from the
+// cross-correlation of measured and commanded forward speed and turn rate over lags in
+// [-5, 5] s. The start for timing effects: a clock offset of seconds is far outside the
+// basin of a local fit started at zero.
+double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::VectorXd& p) {
+  const auto& P = d.rec->poses;
+  const auto& u = d.rec->controls;
+  const double dt = 0.05, half = 0.1;
+  std::vector<double> vm, wm, tgrid;
+  for (double t = std::max(d.t.front(), d.t_ctrl0) + half; t < d.t_split - half; t += dt) {
+    const auto a = std::lower_bound(d.t.begin(), d.t.end(), t - half);
+    const auto b = std::lower_bound(d.t.begin(), d.t.end(), t + half);
+    if (a == d.t.end() || b == d.t.end() || b <= a) continue;
+    const size_t i = static_cast<size_t>(a - d.t.begin()), j = static_cast<size_t>(b - d.t.begin());
+    const double span = d.t[j] - d.t[i];
+    if (span < half || span > 4 * half) continue;
+    const Eigen::Vector2d dp = P[j].z.head<2>() - P[i].z.head<2>();
+    const double th = P[i].z.z() + 0.5 * WrapAngle(P[j].z.z() - P[i].z.z());
+    vm.push_back((std::cos(th) * dp.x() + std::sin(th) * dp.y()) / span);
+    wm.push_back(WrapAngle(P[j].z.z() - P[i].z.z()) / span);
+    tgrid.push_back(t);
+  }
+  if (vm.size() < 50) return 0.0;
+  auto corr = [](const std::vector<double>& a, const std::vector<double>& b) {
+    const double n = static_cast<double>(a.size());
+    const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
+    const double mb = std::accumulate(b.begin(), b.end(), 0.0) / n;
+    double sab = 0, saa = 0, sbb = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+      sab += (a[k] - ma) * (b[k] - mb);
+      saa += (a[k] - ma) * (a[k] - ma);
+      sbb += (b[k] - mb) * (b[k] - mb);
+    }
+    return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
+  };
+  double best = -1e300, best_lag = 0.0;
+  std::vector<double> vc(vm.size()), wc(vm.size());
+  for (double lag = -5.0; lag <= 5.0 + 1e-9; lag += 0.02) {
+    for (size_t k = 0; k < tgrid.size(); ++k) {
+      const auto tw = bare.model().BodyTwist(p.data(), u.At(tgrid[k] - lag).data());
+      vc[k] = tw.vx;
+      wc[k] = tw.omega;
+    }
+    const double c = corr(vm, vc) + corr(wm, wc);
+    if (c > best) {
+      best = c;
+      best_lag = lag;
+    }
+  }
+  return best_lag;
+}
+
 struct Evaluation {
   ErrorStats fit, held;
   std::vector<ResidualPoint> points;
@@ -608,6 +660,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.model = o.model;
   res.source = rec.source;
   res.stats = rec.stats;
+  res.warnings = rec.warnings;
   res.horizon_s = o.horizon_s;
   auto progress = [&](double f, const std::string& s) {
     if (o.progress) o.progress(f, s);
@@ -632,6 +685,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   FitReport base_report;
   Fit base = FitBaseline(bare, d, p0, o, &base_report);
   ComputeFeatures(&d, bare, base.p);
+  const double command_lag = EstimateCommandLag(d, bare, base.p);
   Evaluation base_eval = Evaluate(bare, base.p, d);
   res.before = MakeReport(bare, base, base_eval, {}, static_cast<int>(d.fit_windows.size()));
   res.before.unique = base_report.unique;
@@ -695,6 +749,13 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
       s0.head(old_np) = current.p;
       for (int i = old_np; i < np; ++i) s0[i] = sys->params()[static_cast<size_t>(i)].default_value;
       std::vector<Eigen::VectorXd> starts = {s0};
+      if (np - old_np == 1 && (eff->stage() == EffectStage::kControlTiming ||
+                               (eff->time_varying() && std::abs(command_lag) > 0.05))) {
+        // Timing: start at the lag the cross-correlation found (a delay or a lag's tau).
+        Eigen::VectorXd s = s0;
+        s[np - 1] = eff->stage() == EffectStage::kControlTiming ? command_lag : std::abs(command_lag);
+        starts.push_back(s);
+      }
       if (np - old_np == 1) {
         for (double k : {-2.0, 2.0}) {
           Eigen::VectorXd s = s0;

@@ -186,6 +186,14 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
   }
   rec.stats.control_rows = static_cast<int>(controls.size());
   rec.stats.pose_rows = static_cast<int>(poses.size());
+  double max_abs_theta = 0.0;
+  for (const auto& r : poses) max_abs_theta = std::max(max_abs_theta, std::abs(r.v[2]));
+  if (max_abs_theta > 2.0 * M_PI + 0.5) {
+    std::ostringstream m;
+    m << ppath << ": theta reaches " << max_abs_theta
+      << "; kincal expects radians (an unwrapped heading is fine, degrees are not)";
+    rec.warnings.push_back(m.str());
+  }
   for (const auto& r : poses) {
     PoseSample s{to_ns(r.t), Eigen::Vector3d(r.v[0], r.v[1], WrapAngle(r.v[2]))};
     if (!rec.poses.empty() && rec.poses.back().t_ns == s.t_ns) {

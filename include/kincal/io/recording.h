@@ -44,6 +44,7 @@ struct Recording {
   ControlSignal controls;    // commanded controls, model's channel order
   std::vector<PoseSample> poses;  // sorted by time, unique times
   RecordingStats stats;
+  std::vector<std::string> warnings;  // suspicious but readable input
 };
 
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
