@@ -1,0 +1,35 @@
+// Pinhole camera with radial (k1, k2, k3) and tangential (p1, p2) distortion, in OpenCV's
+// parameter order and conventions, so calibrations move both ways (FileStorage YAML with
+// the keys of OpenCV's calibration sample).
+//
+// Frames: camera frame x right, y down, z forward (optical axis), metres. Pixels: u right,
+// v down, origin at the centre of the top-left pixel.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+
+namespace kincal::vision {
+
+struct CameraModel {
+  int width = 0, height = 0;         // px
+  double fx = 0, fy = 0, cx = 0, cy = 0;  // px
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+
+  // Normalised undistorted (x/z, y/z) -> pixel.
+  Eigen::Vector2d NormalizedToPixel(const Eigen::Vector2d& n) const;
+  // Camera-frame point -> pixel (z > 0 expected).
+  Eigen::Vector2d Project(const Eigen::Vector3d& p) const {
+    return NormalizedToPixel(p.head<2>() / p.z());
+  }
+  // Pixel -> normalised undistorted coordinates (iterative inversion of the distortion).
+  Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& px) const;
+  bool IsValid(std::string* error) const;
+};
+
+// OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width,
+// image_height. Throws std::runtime_error naming the file and the missing key.
+CameraModel ReadCameraYaml(const std::string& path);
+void WriteCameraYaml(const CameraModel& cam, const std::string& path);
+
+}  // namespace kincal::vision

@@ -1,0 +1,53 @@
+// Circular marker detection with sub-pixel centres, and target identification.
+//
+// Threshold (Otsu within the search region unless fixed), connected components, shape
+// tests (area, circularity from second moments, fill ratio), then an intensity-weighted
+// centre: every pixel around a blob counts by how much of it the marker covers, estimated
+// from its grey level between the local background and the marker's own level, so
+// partially covered edge pixels place the centre to a small fraction of a pixel.
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "kincal/vision/camera.h"
+#include "kincal/vision/target.h"
+
+namespace kincal::vision {
+
+struct DetectorOptions {
+  bool dark_on_light = true;
+  int threshold = -1;            // grey level; -1: Otsu within the search region
+  int min_area_px = 12;
+  int max_area_px = 40000;
+  double min_circularity = 0.6;  // minor/major axis ratio of the blob's ellipse
+  double min_fill = 0.6;         // blob area / area of that ellipse
+  bool IsValid(std::string* error) const;
+};
+
+struct Marker {
+  Eigen::Vector2d centre_px;  // intensity-weighted centre (distorted image), px
+  double area_px = 0.0;
+  double diameter_px = 0.0;
+  int id = -1;                // index in the target layout once identified
+};
+
+struct Rejected {
+  Eigen::Vector2d centre_px;
+  std::string reason;
+};
+
+// Detects markers in `roi` (whole image if empty) of an 8-bit grey image.
+std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& opt,
+                                  cv::Rect roi = {}, std::vector<Rejected>* rejected = nullptr);
+
+// Assigns layout ids: among the detections, the set of layout.markers.size() markers and
+// the correspondence whose similarity fit (in undistorted normalised coordinates) leaves
+// the smallest residual. Returns false when no assignment fits within `max_rms` (relative
+// to the target's size in the image).
+bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vector<Marker>* markers,
+                    double max_rms = 0.05);
+
+}  // namespace kincal::vision

@@ -1,0 +1,153 @@
+#include "kincal/vision/pose.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+
+namespace kincal::vision {
+namespace {
+
+Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d S;
+  S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return S;
+}
+
+Eigen::Matrix3d Exp(const Eigen::Vector3d& w) {
+  const double a = w.norm();
+  if (a < 1e-12) return Eigen::Matrix3d::Identity() + Skew(w);
+  return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 2, 6> LoweJacobian(const Eigen::Vector3d& p, const Pose3& pose) {
+  const Eigen::Vector3d xr = pose.R * p;
+  const Eigen::Vector3d c = xr + pose.t;
+  const double iz = 1.0 / c.z();
+  Eigen::Matrix<double, 2, 3> dproj;
+  dproj << iz, 0, -c.x() * iz * iz, 0, iz, -c.y() * iz * iz;
+  Eigen::Matrix<double, 2, 6> J;
+  J.leftCols<3>() = dproj;
+  J.rightCols<3>() = -dproj * Skew(xr);
+  return J;
+}
+
+LoweResult LowePose(std::span<const Eigen::Vector3d> object,
+                    std::span<const Eigen::Vector2d> normalized, const Pose3& initial, double fx,
+                    double sigma_px, int max_iterations) {
+  LoweResult r;
+  const size_t n = object.size();
+  if (n < 3 || normalized.size() != n) return r;
+  Eigen::Matrix3d R = initial.R;
+  Eigen::Vector3d D = initial.t;
+  Eigen::Matrix<double, 6, 6> H;
+  for (int it = 0; it < max_iterations; ++it) {
+    H.setZero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    double sse = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d xr = R * object[i];
+      const Eigen::Vector3d c = xr + D;
+      if (c.z() <= 0) return r;
+      const double iz = 1.0 / c.z();
+      const Eigen::Vector2d e = normalized[i] - Eigen::Vector2d(c.x() * iz, c.y() * iz);
+      const Eigen::Matrix<double, 2, 6> J = LoweJacobian(object[i], Pose3{R, D});
+      H += J.transpose() * J;
+      g += J.transpose() * e;
+      sse += e.squaredNorm();
+    }
+    const Eigen::Matrix<double, 6, 1> step = H.ldlt().solve(g);
+    D += step.head<3>();
+    R = Exp(step.tail<3>()) * R;
+    r.iterations = it + 1;
+    r.rms_px = std::sqrt(sse / static_cast<double>(n)) * fx;
+    if (step.squaredNorm() < 1e-24) break;
+  }
+  // Orthonormalise (rounding over iterations).
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  R = svd.matrixU() * svd.matrixV().transpose();
+  r.pose.R = R;
+  r.pose.t = D;
+  const double s = sigma_px / fx;  // centre noise in normalised units
+  r.covariance = H.inverse() * s * s;
+  r.ok = r.covariance.allFinite();
+  return r;
+}
+
+bool PlanarInitialPose(std::span<const Eigen::Vector3d> object,
+                       std::span<const Eigen::Vector2d> normalized, Pose3* pose) {
+  const size_t n = object.size();
+  if (n < 4 || normalized.size() != n) return false;
+  // DLT for H with normalised image = H [X Y 1]^T.
+  Eigen::MatrixXd A(2 * n, 9);
+  for (size_t i = 0; i < n; ++i) {
+    const double X = object[i].x(), Y = object[i].y(), u = normalized[i].x(), v = normalized[i].y();
+    A.row(static_cast<long>(2 * i)) << X, Y, 1, 0, 0, 0, -u * X, -u * Y, -u;
+    A.row(static_cast<long>(2 * i + 1)) << 0, 0, 0, X, Y, 1, -v * X, -v * Y, -v;
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::VectorXd h = svd.matrixV().col(8);
+  Eigen::Matrix3d Hm;
+  Hm << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8];
+  double lambda = 1.0 / Hm.col(0).norm();
+  if (Hm(2, 2) * lambda < 0) lambda = -lambda;  // target in front of the camera
+  Eigen::Vector3d r1 = lambda * Hm.col(0), r2 = lambda * Hm.col(1);
+  const Eigen::Vector3d t = lambda * Hm.col(2);
+  Eigen::Matrix3d R;
+  R.col(0) = r1;
+  R.col(1) = r2;
+  R.col(2) = r1.cross(r2);
+  Eigen::JacobiSVD<Eigen::Matrix3d> s2(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  R = s2.matrixU() * s2.matrixV().transpose();
+  if (R.determinant() < 0) return false;
+  pose->R = R;
+  pose->t = t;
+  return t.z() > 0;
+}
+
+PlanarPose GroundPlanePose(const FloorExtrinsics& floor, double target_height_m,
+                           std::span<const Eigen::Vector3d> object,
+                           std::span<const Eigen::Vector2d> normalized,
+                           const Eigen::Vector3d& initial, double fx, double sigma_px,
+                           int max_iterations) {
+  PlanarPose r;
+  const size_t n = object.size();
+  if (n < 2 || normalized.size() != n) return r;
+  Eigen::Vector3d q = initial;
+  Eigen::Matrix3d H;
+  for (int it = 0; it < max_iterations; ++it) {
+    H.setZero();
+    Eigen::Vector3d g = Eigen::Vector3d::Zero();
+    double sse = 0;
+    const double c = std::cos(q.z()), s = std::sin(q.z());
+    for (size_t i = 0; i < n; ++i) {
+      const double px = object[i].x(), py = object[i].y();
+      const Eigen::Vector3d Xf(q.x() + c * px - s * py, q.y() + s * px + c * py,
+                               target_height_m + object[i].z());
+      const Eigen::Vector3d Xc = floor.R_cf * Xf + floor.t_cf;
+      if (Xc.z() <= 0) return r;
+      const double iz = 1.0 / Xc.z();
+      const Eigen::Vector2d e = normalized[i] - Eigen::Vector2d(Xc.x() * iz, Xc.y() * iz);
+      Eigen::Matrix<double, 2, 3> dproj;
+      dproj << iz, 0, -Xc.x() * iz * iz, 0, iz, -Xc.y() * iz * iz;
+      Eigen::Matrix3d dXf;
+      dXf << 1, 0, -s * px - c * py, 0, 1, c * px - s * py, 0, 0, 0;
+      const Eigen::Matrix<double, 2, 3> J = dproj * floor.R_cf * dXf;
+      H += J.transpose() * J;
+      g += J.transpose() * e;
+      sse += e.squaredNorm();
+    }
+    const Eigen::Vector3d step = H.ldlt().solve(g);
+    q += step;
+    r.iterations = it + 1;
+    r.rms_px = std::sqrt(sse / static_cast<double>(n)) * fx;
+    if (step.squaredNorm() < 1e-24) break;
+  }
+  r.xytheta = q;
+  const double sn = sigma_px / fx;
+  r.covariance = H.inverse() * sn * sn;
+  r.ok = r.covariance.allFinite();
+  return r;
+}
+
+}  // namespace kincal::vision

@@ -1,0 +1,92 @@
+#include "kincal/vision/target.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+
+namespace kincal::vision {
+
+TargetLayout TargetLayout::Thesis() {
+  TargetLayout t;
+  t.name = "thesis";
+  t.markers = {{0.045, 0.025}, {0.045, -0.025}, {-0.045, -0.025}, {-0.020, 0.025}};
+  t.marker_radius_m = 0.008;
+  return t;
+}
+
+bool TargetLayout::IsValid(std::string* error) const {
+  if (markers.size() < 4) {
+    *error = "a target needs at least 4 markers";
+    return false;
+  }
+  if (!(marker_radius_m > 0.0)) {
+    *error = "marker_radius_m must be > 0";
+    return false;
+  }
+  return true;
+}
+
+RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
+                           const RenderOptions& opt, std::mt19937_64& rng) {
+  cv::Mat img(cam.height, cam.width, CV_64FC1, cv::Scalar(opt.background));
+  RenderedFrame out;
+  const Eigen::Vector3d n = pose.R.col(2);  // plate normal in the camera frame
+  const double d = n.dot(pose.t);           // plane: n . X = d
+  const int s = std::max(1, opt.supersample);
+  const double r2 = layout.marker_radius_m * layout.marker_radius_m;
+  for (const auto& m : layout.markers) {
+    const Eigen::Vector3d c = pose.R * Eigen::Vector3d(m.x(), m.y(), 0.0) + pose.t;
+    out.centres.push_back(cam.Project(c));
+    // Bounding box of the projected disk.
+    double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
+    for (int k = 0; k < 32; ++k) {
+      const double a = 2.0 * M_PI * k / 32.0;
+      const Eigen::Vector3d b = pose.R * Eigen::Vector3d(m.x() + layout.marker_radius_m * std::cos(a),
+                                                         m.y() + layout.marker_radius_m * std::sin(a), 0.0) + pose.t;
+      const Eigen::Vector2d p = cam.Project(b);
+      u0 = std::min(u0, p.x());
+      u1 = std::max(u1, p.x());
+      v0 = std::min(v0, p.y());
+      v1 = std::max(v1, p.y());
+    }
+    const int iu0 = std::max(0, static_cast<int>(std::floor(u0)) - 2);
+    const int iu1 = std::min(cam.width - 1, static_cast<int>(std::ceil(u1)) + 2);
+    const int iv0 = std::max(0, static_cast<int>(std::floor(v0)) - 2);
+    const int iv1 = std::min(cam.height - 1, static_cast<int>(std::ceil(v1)) + 2);
+    for (int v = iv0; v <= iv1; ++v) {
+      for (int u = iu0; u <= iu1; ++u) {
+        int inside = 0;
+        for (int sy = 0; sy < s; ++sy) {
+          for (int sx = 0; sx < s; ++sx) {
+            const Eigen::Vector2d px(u - 0.5 + (sx + 0.5) / s, v - 0.5 + (sy + 0.5) / s);
+            const Eigen::Vector2d nn = cam.PixelToNormalized(px);
+            const Eigen::Vector3d ray(nn.x(), nn.y(), 1.0);
+            const double lambda = d / n.dot(ray);
+            const Eigen::Vector3d X = pose.R.transpose() * (lambda * ray - pose.t);
+            if ((X.head<2>() - m).squaredNorm() <= r2) ++inside;
+          }
+        }
+        const double cover = static_cast<double>(inside) / (s * s);
+        double& pix = img.at<double>(v, u);
+        pix = pix * (1.0 - cover) + opt.foreground * cover;
+      }
+    }
+  }
+  if (!layout.dark_on_light) img = opt.background + opt.foreground - img;
+  if (opt.blur_sigma_px > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), opt.blur_sigma_px);
+  std::normal_distribution<double> g(0.0, opt.noise_sigma);
+  const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
+  cv::Mat out8(cam.height, cam.width, CV_8UC1);
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const double rr = ((u - cam.cx) * (u - cam.cx) + (v - cam.cy) * (v - cam.cy)) / rmax2;
+      double val = img.at<double>(v, u) * (1.0 - opt.vignetting * rr);
+      if (opt.noise_sigma > 0.0) val += g(rng);
+      out8.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(std::lround(val));
+    }
+  }
+  out.image = out8;
+  return out;
+}
+
+}  // namespace kincal::vision

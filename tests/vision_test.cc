@@ -1,0 +1,222 @@
+// Vision: camera model, synthetic camera, sub-pixel marker centres, target
+// identification, Lowe pose (against finite differences and cv::solvePnP), ground-plane
+// pose, end to end through rendered images.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "kincal/vision/camera.h"
+#include "kincal/vision/markers.h"
+#include "kincal/vision/pose.h"
+#include "kincal/vision/target.h"
+
+namespace kincal::vision {
+namespace {
+
+CameraModel TestCamera() {
+  CameraModel c;
+  c.width = 640;
+  c.height = 480;
+  c.fx = 820;
+  c.fy = 820;
+  c.cx = 321.3;
+  c.cy = 238.7;
+  c.k1 = -0.12;
+  c.k2 = 0.05;
+  c.p1 = 0.0007;
+  c.p2 = -0.0004;
+  return c;
+}
+
+// Camera 1.2 m above the floor looking down; a robot-mounted target 0.1 m above the floor.
+FloorExtrinsics Overhead() {
+  FloorExtrinsics f;
+  f.R_cf = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+           Eigen::AngleAxisd(0.05, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  f.t_cf = Eigen::Vector3d(0.02, -0.03, 1.2);
+  return f;
+}
+
+Pose3 TargetPose(const FloorExtrinsics& f, const Eigen::Vector3d& q, double height) {
+  Pose3 p;
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(q.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  p.R = f.R_cf * Rz;
+  p.t = f.R_cf * Eigen::Vector3d(q.x(), q.y(), height) + f.t_cf;
+  return p;
+}
+
+TEST(Camera, UndistortInvertsDistort) {
+  const CameraModel c = TestCamera();
+  for (double u = 0; u <= 640; u += 40) {
+    for (double v = 0; v <= 480; v += 40) {
+      const Eigen::Vector2d px(u, v);
+      EXPECT_LT((c.NormalizedToPixel(c.PixelToNormalized(px)) - px).norm(), 1e-9) << u << "," << v;
+    }
+  }
+}
+
+TEST(Camera, OpenCvYamlRoundTripAndErrors) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string path = (dir / "kincal_cam_test.yaml").string();
+  WriteCameraYaml(TestCamera(), path);
+  const CameraModel c = ReadCameraYaml(path);
+  EXPECT_EQ(c.width, 640);
+  EXPECT_DOUBLE_EQ(c.fx, 820);
+  EXPECT_DOUBLE_EQ(c.p2, -0.0004);
+  // The same numbers as OpenCV's own projection.
+  std::vector<cv::Point3d> obj = {{0.1, -0.05, 1.0}};
+  std::vector<cv::Point2d> img;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
+  const cv::Mat D = (cv::Mat_<double>(5, 1) << c.k1, c.k2, c.p1, c.p2, c.k3);
+  cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D, img);
+  const Eigen::Vector2d ours = c.Project(Eigen::Vector3d(0.1, -0.05, 1.0));
+  EXPECT_NEAR(ours.x(), img[0].x, 1e-9);
+  EXPECT_NEAR(ours.y(), img[0].y, 1e-9);
+  const std::string bad = (dir / "kincal_cam_bad.yaml").string();
+  std::ofstream(bad) << "%YAML:1.0\n---\nimage_width: 640\n";
+  try {
+    ReadCameraYaml(bad);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Lowe, JacobianMatchesFiniteDifferences) {
+  const Pose3 pose = TargetPose(Overhead(), Eigen::Vector3d(0.1, 0.2, 0.7), 0.1);
+  const Eigen::Vector3d p(0.045, -0.025, 0.0);
+  const auto J = LoweJacobian(p, pose);
+  auto proj = [&](const Pose3& q) {
+    const Eigen::Vector3d c = q.R * p + q.t;
+    return Eigen::Vector2d(c.x() / c.z(), c.y() / c.z());
+  };
+  for (int k = 0; k < 6; ++k) {
+    const double h = 1e-7;
+    Pose3 a = pose, b = pose;
+    if (k < 3) {
+      a.t[k] += h;
+      b.t[k] -= h;
+    } else {
+      Eigen::Vector3d w = Eigen::Vector3d::Zero();
+      w[k - 3] = h;
+      a.R = Eigen::AngleAxisd(h, w.normalized()).toRotationMatrix() * pose.R;
+      b.R = Eigen::AngleAxisd(-h, w.normalized()).toRotationMatrix() * pose.R;
+    }
+    const Eigen::Vector2d fd = (proj(a) - proj(b)) / (2 * h);
+    EXPECT_LT((fd - J.col(k)).norm(), 1e-6 * std::max(1.0, fd.norm())) << "column " << k;
+  }
+}
+
+TEST(Lowe, RecoversPoseAndAgreesWithSolvePnP) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> g(0.0, 0.05);  // px
+  std::vector<Eigen::Vector3d> obj;
+  for (const auto& m : layout.markers) obj.emplace_back(m.x(), m.y(), 0.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Pose3 truth = TargetPose(Overhead(), Eigen::Vector3d(0.2 * g(rng) / 0.05, 0.1, trial * 0.3), 0.1);
+    std::vector<Eigen::Vector2d> norm;
+    std::vector<cv::Point3d> cobj;
+    std::vector<cv::Point2d> cimg;
+    for (const auto& p : obj) {
+      const Eigen::Vector2d px = cam.Project(truth.R * p + truth.t) + Eigen::Vector2d(g(rng), g(rng));
+      norm.push_back(cam.PixelToNormalized(px));
+      cobj.emplace_back(p.x(), p.y(), p.z());
+      cimg.emplace_back(norm.back().x(), norm.back().y());
+    }
+    Pose3 init;
+    ASSERT_TRUE(PlanarInitialPose(obj, norm, &init));
+    const LoweResult r = LowePose(obj, norm, init, cam.fx, 0.05);
+    ASSERT_TRUE(r.ok);
+    // Pose error against the truth within 4 sigma of its own covariance (position).
+    const Eigen::Vector3d dt = r.pose.t - truth.t;
+    const Eigen::Matrix3d Ct = r.covariance.topLeftCorner<3, 3>();
+    EXPECT_LT(dt.dot(Ct.ldlt().solve(dt)), 25.0) << trial;
+    // solvePnP (ITERATIVE) minimises the same reprojection error: same answer.
+    cv::Mat rvec, tvec;
+    cv::solvePnP(cobj, cimg, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false, cv::SOLVEPNP_ITERATIVE);
+    EXPECT_LT((r.pose.t - Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2))).norm(), 1e-6);
+  }
+}
+
+TEST(Markers, SubPixelCentresOnSyntheticImages) {
+  // Markers about 14 px across at 1 grey level of noise: centre error RMS <= 0.02 px.
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  const FloorExtrinsics floor = Overhead();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> U(-0.2, 0.2);
+  RenderOptions ro;
+  DetectorOptions dopt;
+  double sq = 0;
+  int n = 0;
+  for (int f = 0; f < 30; ++f) {
+    const Pose3 pose = TargetPose(floor, Eigen::Vector3d(U(rng), U(rng), 10 * U(rng)), 0.1);
+    const RenderedFrame fr = RenderTarget(cam, pose, layout, ro, rng);
+    auto markers = DetectMarkers(fr.image, dopt);
+    ASSERT_EQ(markers.size(), 4u) << "frame " << f;
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers)) << "frame " << f;
+    for (const auto& m : markers) {
+      EXPECT_GT(m.diameter_px, 10.0);
+      sq += (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).squaredNorm() / 2.0;
+      ++n;
+    }
+  }
+  const double rms = std::sqrt(sq / n);
+  RecordProperty("centre_rms_px", std::to_string(rms));
+  EXPECT_LE(rms, 0.02) << "centre RMS per axis " << rms << " px";
+}
+
+TEST(Markers, IdentifiesTheTargetAmongDistractorsAndRejectsNonCircles) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(3);
+  const Pose3 pose = TargetPose(Overhead(), Eigen::Vector3d(0.05, -0.1, 2.0), 0.1);
+  RenderedFrame fr = RenderTarget(cam, pose, layout, RenderOptions{}, rng);
+  cv::rectangle(fr.image, cv::Rect(30, 30, 40, 8), cv::Scalar(40), cv::FILLED);  // a stripe
+  std::vector<Rejected> rejected;
+  auto markers = DetectMarkers(fr.image, DetectorOptions{}, {}, &rejected);
+  ASSERT_EQ(markers.size(), 4u);
+  ASSERT_FALSE(rejected.empty());
+  EXPECT_NE(rejected[0].reason.find("circularity"), std::string::npos) << rejected[0].reason;
+  std::shuffle(markers.begin(), markers.end(), rng);
+  ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+  for (const auto& m : markers) {
+    EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  }
+}
+
+TEST(GroundPlane, PoseFromRenderedImagesWithinItsCovariance) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  const FloorExtrinsics floor = Overhead();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(-0.25, 0.25);
+  std::vector<Eigen::Vector3d> obj;
+  for (const auto& m : layout.markers) obj.emplace_back(m.x(), m.y(), 0.0);
+  int inside = 0;
+  const int frames = 20;
+  for (int f = 0; f < frames; ++f) {
+    const Eigen::Vector3d q(U(rng), U(rng), 12 * U(rng));
+    const RenderedFrame fr = RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    auto markers = DetectMarkers(fr.image, DetectorOptions{});
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+    std::vector<Eigen::Vector2d> norm(4);
+    for (const auto& m : markers) norm[static_cast<size_t>(m.id)] = cam.PixelToNormalized(m.centre_px);
+    const PlanarPose p = GroundPlanePose(floor, 0.1, obj, norm, Eigen::Vector3d(0, 0, q.z() + 0.3), cam.fx, 0.02);
+    ASSERT_TRUE(p.ok);
+    Eigen::Vector3d e = p.xytheta - q;
+    e.z() = std::remainder(e.z(), 2 * M_PI);
+    EXPECT_LT(e.head<2>().norm(), 1e-3) << f;
+    if (e.dot(p.covariance.ldlt().solve(e)) < 14.2) ++inside;  // chi2(3) 99.7 %
+  }
+  EXPECT_GE(inside, frames * 8 / 10);
+}
+
+}  // namespace
+}  // namespace kincal::vision
