@@ -12,5 +12,6 @@ using Command = std::function<int()>;
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);
 Command AddAnalyze(CLI::App& app);
+Command AddCamcal(CLI::App& app);
 
 }  // namespace kincal::app

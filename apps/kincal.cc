@@ -41,6 +41,8 @@ int main(int argc, char** argv) {
   auto* analyze = app.add_subcommand(
       "analyze", "calibrate on measured data, find missing effects, report before/after");
   commands[analyze] = kincal::app::AddAnalyze(*analyze);
+  auto* camcal = app.add_subcommand("camcal", "calibrate a camera from board images or points");
+  commands[camcal] = kincal::app::AddCamcal(*camcal);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

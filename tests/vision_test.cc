@@ -220,3 +220,100 @@ TEST(GroundPlane, PoseFromRenderedImagesWithinItsCovariance) {
 
 }  // namespace
 }  // namespace kincal::vision
+
+#include "kincal/vision/calibration.h"
+
+namespace kincal::vision {
+namespace {
+
+std::vector<CalibrationView> SyntheticViews(const CameraModel& cam, int n_views, double noise_px,
+                                            std::mt19937_64& rng) {
+  std::normal_distribution<double> g(0.0, noise_px);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  std::vector<CalibrationView> views;
+  while (static_cast<int>(views.size()) < n_views) {
+    CalibrationView v;
+    v.name = "view " + std::to_string(views.size());
+    const Eigen::Matrix3d R = (Eigen::AngleAxisd(M_PI + 0.5 * U(rng), Eigen::Vector3d::UnitX()) *
+                               Eigen::AngleAxisd(0.5 * U(rng), Eigen::Vector3d::UnitY()) *
+                               Eigen::AngleAxisd(0.3 * U(rng), Eigen::Vector3d::UnitZ()))
+                                  .toRotationMatrix();
+    const Eigen::Vector3d t(-0.1 + 0.08 * U(rng), 0.06 + 0.05 * U(rng), 0.7 + 0.2 * U(rng));
+    bool inside = true;
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 9; ++c) {
+        const Eigen::Vector3d X(0.025 * c, 0.025 * r, 0.0);
+        const Eigen::Vector3d Xc = R * X + t;
+        const Eigen::Vector2d px = cam.Project(Xc) + Eigen::Vector2d(g(rng), g(rng));
+        inside = inside && Xc.z() > 0 && px.x() > 0 && px.y() > 0 && px.x() < cam.width - 1 && px.y() < cam.height - 1;
+        v.object.push_back(X);
+        v.image.push_back(px);
+      }
+    }
+    if (inside) views.push_back(v);
+  }
+  return views;
+}
+
+TEST(Calibration, RecoversIntrinsicsWithin3SigmaAndMatchesOpenCv) {
+  const CameraModel truth = TestCamera();
+  std::mt19937_64 rng(21);
+  const auto views = SyntheticViews(truth, 15, 0.1, rng);
+  CalibrationOptions opt;
+  opt.width = truth.width;
+  opt.height = truth.height;
+  const CalibrationResult r = CalibrateCamera(views, opt);
+  ASSERT_TRUE(r.sigma_ok);
+  const double t[8] = {truth.fx, truth.fy, truth.cx, truth.cy, truth.k1, truth.k2, truth.p1, truth.p2};
+  const double e[8] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2};
+  for (int i = 0; i < 8; ++i) EXPECT_LE(std::abs(e[i] - t[i]), 3.0 * r.sigma[i]) << "parameter " << i;
+  EXPECT_NEAR(r.rms_px, 0.1 * std::sqrt(2.0), 0.015);  // OpenCV rms: both axes per point
+  // cv::calibrateCamera on the same points (k3 fixed, as ours): the same optimum.
+  std::vector<std::vector<cv::Point3f>> obj;
+  std::vector<std::vector<cv::Point2f>> img;
+  for (const auto& v : views) {
+    obj.emplace_back();
+    img.emplace_back();
+    for (size_t k = 0; k < v.object.size(); ++k) {
+      obj.back().emplace_back(static_cast<float>(v.object[k].x()), static_cast<float>(v.object[k].y()), 0.f);
+      img.back().emplace_back(static_cast<float>(v.image[k].x()), static_cast<float>(v.image[k].y()));
+    }
+  }
+  cv::Mat K, D;
+  std::vector<cv::Mat> rv, tv;
+  const double cv_rms = cv::calibrateCamera(obj, img, cv::Size(truth.width, truth.height), K, D, rv, tv, cv::CALIB_FIX_K3);
+  EXPECT_NEAR(cv_rms, r.rms_px, 1e-3);
+  EXPECT_NEAR(K.at<double>(0, 0), r.camera.fx, 3.0 * r.sigma[0]);
+  EXPECT_NEAR(K.at<double>(0, 2), r.camera.cx, 3.0 * r.sigma[2]);
+}
+
+TEST(Calibration, BadInputNamesTheProblem) {
+  const CameraModel truth = TestCamera();
+  std::mt19937_64 rng(2);
+  auto views = SyntheticViews(truth, 4, 0.1, rng);
+  CalibrationOptions opt;
+  opt.width = truth.width;
+  opt.height = truth.height;
+  auto message = [&](std::vector<CalibrationView> v, CalibrationOptions o) {
+    try {
+      CalibrateCamera(v, o);
+    } catch (const std::runtime_error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message({views[0], views[1]}, opt).find("at least 3 views"), std::string::npos);
+  auto nonplanar = views;
+  nonplanar[2].object[5].z() = 0.01;
+  EXPECT_NE(message(nonplanar, opt).find("view 2: board points are not planar"), std::string::npos);
+  auto small = opt;
+  small.width = 320;
+  EXPECT_NE(message(views, small).find("lies outside the 320x480 image"), std::string::npos);
+  auto few = views;
+  few[1].object.resize(3);
+  few[1].image.resize(3);
+  EXPECT_NE(message(few, opt).find("view 1: at least 6 point pairs"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace kincal::vision

@@ -1,0 +1,166 @@
+// kincal camcal: camera calibration from board images or a points file, with
+// cv::calibrateCamera on the same data side by side.
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+#include <regex>
+
+#include "commands.h"
+#include "kincal/vision/calibration.h"
+
+namespace kincal::app {
+namespace {
+
+struct Board {
+  std::string kind;  // chessboard, circles, acircles
+  int cols = 0, rows = 0;
+  double pitch = 0;
+};
+
+Board ParseBoard(const std::string& s) {
+  static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
+  std::smatch m;
+  if (!std::regex_match(s, m, re)) {
+    throw std::runtime_error("--board '" + s + "': expected KIND:COLSxROWS:PITCH with KIND chessboard, circles or acircles, e.g. chessboard:9x6:0.025");
+  }
+  Board b{m[1], std::stoi(m[2]), std::stoi(m[3]), std::stod(m[4])};
+  if (b.cols < 2 || b.rows < 2 || !(b.pitch > 0)) throw std::runtime_error("--board '" + s + "': need >= 2x2 points and pitch > 0");
+  return b;
+}
+
+std::vector<Eigen::Vector3d> BoardPoints(const Board& b) {
+  std::vector<Eigen::Vector3d> pts;
+  for (int r = 0; r < b.rows; ++r) {
+    for (int c = 0; c < b.cols; ++c) {
+      const double x = b.kind == "acircles" ? (2 * c + r % 2) * b.pitch : c * b.pitch;
+      pts.emplace_back(x, r * b.pitch, 0.0);
+    }
+  }
+  return pts;
+}
+
+std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, const Board& b, int* w, int* h) {
+  std::vector<std::filesystem::path> files;
+  if (!std::filesystem::is_directory(dir)) throw std::runtime_error(dir + ": not a directory");
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const auto ext = e.path().extension().string();
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<vision::CalibrationView> views;
+  for (const auto& f : files) {
+    const cv::Mat img = cv::imread(f.string(), cv::IMREAD_GRAYSCALE);
+    if (img.empty()) throw std::runtime_error(f.string() + ": unreadable image");
+    if (*w == 0) {
+      *w = img.cols;
+      *h = img.rows;
+    } else if (img.cols != *w || img.rows != *h) {
+      throw std::runtime_error(f.string() + ": image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
+                               " differs from the first image's " + std::to_string(*w) + "x" + std::to_string(*h));
+    }
+    std::vector<cv::Point2f> corners;
+    const cv::Size size(b.cols, b.rows);
+    bool found = false;
+    if (b.kind == "chessboard") {
+      found = cv::findChessboardCorners(img, size, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+      if (found) cv::cornerSubPix(img, corners, {5, 5}, {-1, -1}, {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4});
+    } else {
+      found = cv::findCirclesGrid(img, size, corners, b.kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
+    }
+    if (!found) {
+      std::cerr << "warning: " << f.string() << ": board not found, skipped\n";
+      continue;
+    }
+    vision::CalibrationView v;
+    v.name = f.filename().string();
+    v.object = BoardPoints(b);
+    for (const auto& c : corners) v.image.emplace_back(c.x, c.y);
+    views.push_back(std::move(v));
+  }
+  return views;
+}
+
+}  // namespace
+
+Command AddCamcal(CLI::App& app) {
+  struct Args {
+    std::string images, board, points, size, out, json;
+    bool k3 = false;
+  };
+  auto a = std::make_shared<Args>();
+  app.add_option("--images", a->images, "folder of board images");
+  app.add_option("--board", a->board, "KIND:COLSxROWS:PITCH (chessboard, circles, acircles; metres)");
+  app.add_option("--points", a->points, "points file, header view,X,Y,Z,u,v");
+  app.add_option("--image-size", a->size, "WxH (with --points)");
+  app.add_option("--out", a->out, "OpenCV FileStorage YAML to write")->required();
+  app.add_option("--json", a->json, "JSON with values, 1-sigma and rms_px");
+  app.add_flag("--k3", a->k3, "also estimate k3");
+  return [a]() -> int {
+    std::vector<vision::CalibrationView> views;
+    vision::CalibrationOptions opt;
+    opt.use_k3 = a->k3;
+    if (!a->points.empty() == !a->images.empty()) throw std::runtime_error("give either --images (with --board) or --points (with --image-size)");
+    if (!a->points.empty()) {
+      static const std::regex re(R"((\d+)x(\d+))");
+      std::smatch m;
+      if (!std::regex_match(a->size, m, re)) throw std::runtime_error("--image-size '" + a->size + "': expected WxH, e.g. 640x480");
+      opt.width = std::stoi(m[1]);
+      opt.height = std::stoi(m[2]);
+      views = vision::ReadCalibrationPoints(a->points);
+    } else {
+      if (a->board.empty()) throw std::runtime_error("--images needs --board KIND:COLSxROWS:PITCH");
+      views = ViewsFromImages(a->images, ParseBoard(a->board), &opt.width, &opt.height);
+    }
+    const auto r = vision::CalibrateCamera(views, opt);
+    vision::WriteCameraYaml(r.camera, a->out);
+    // OpenCV on the same points.
+    std::vector<std::vector<cv::Point3f>> obj;
+    std::vector<std::vector<cv::Point2f>> img;
+    for (const auto& v : views) {
+      obj.emplace_back();
+      img.emplace_back();
+      for (size_t k = 0; k < v.object.size(); ++k) {
+        obj.back().emplace_back(static_cast<float>(v.object[k].x()), static_cast<float>(v.object[k].y()), static_cast<float>(v.object[k].z() - v.object[0].z()));
+        img.back().emplace_back(static_cast<float>(v.image[k].x()), static_cast<float>(v.image[k].y()));
+      }
+    }
+    cv::Mat K, D;
+    std::vector<cv::Mat> rv, tv;
+    const double cv_rms = cv::calibrateCamera(obj, img, cv::Size(opt.width, opt.height), K, D, rv, tv, a->k3 ? 0 : cv::CALIB_FIX_K3);
+    const char* names[9] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
+    const double ours[9] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2, r.camera.k3};
+    const double theirs[9] = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2), D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3), D.total() > 4 ? D.at<double>(4) : 0.0};
+    const int np = a->k3 ? 9 : 8;
+    std::cout << std::setprecision(6) << views.size() << " views, " << r.points << " points\n"
+              << std::setw(6) << "" << std::setw(16) << "kincal" << std::setw(14) << "1-sigma" << std::setw(16) << "cv::calibrate" << "\n";
+    for (int i = 0; i < np; ++i) {
+      std::cout << std::setw(6) << names[i] << std::setw(16) << ours[i] << std::setw(14) << r.sigma[i] << std::setw(16) << theirs[i] << "\n";
+    }
+    std::cout << std::setw(6) << "rms" << std::setw(16) << r.rms_px << std::setw(14) << "" << std::setw(16) << cv_rms << "  px\n";
+    std::cout << "wrote " << a->out << "\n";
+    if (!a->json.empty()) {
+      nlohmann::json j, s, o;
+      for (int i = 0; i < np; ++i) {
+        j[names[i]] = ours[i];
+        s[names[i]] = r.sigma[i];
+        o[names[i]] = theirs[i];
+      }
+      j["sigma"] = s;
+      j["rms_px"] = r.rms_px;
+      j["image_width"] = opt.width;
+      j["image_height"] = opt.height;
+      j["views"] = views.size();
+      o["rms_px"] = cv_rms;
+      j["opencv"] = o;
+      std::ofstream(a->json) << j.dump(2) << "\n";
+    }
+    return 0;
+  };
+}
+
+}  // namespace kincal::app

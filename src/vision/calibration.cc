@@ -1,0 +1,251 @@
+#include "kincal/vision/calibration.h"
+
+#include <ceres/ceres.h>
+#include <ceres/rotation.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <stdexcept>
+
+namespace kincal::vision {
+namespace {
+
+// Pixel residual of one board point. Intrinsics: fx fy cx cy k1 k2 p1 p2 k3.
+struct Reprojection {
+  Reprojection(const Eigen::Vector3d& X, const Eigen::Vector2d& uv) : X_(X), uv_(uv) {}
+  template <typename T>
+  bool operator()(const T* intr, const T* pose, T* r) const {
+    const T p[3] = {T(X_.x()), T(X_.y()), T(X_.z())};
+    T c[3];
+    ceres::AngleAxisRotatePoint(pose, p, c);
+    c[0] += pose[3];
+    c[1] += pose[4];
+    c[2] += pose[5];
+    const T x = c[0] / c[2], y = c[1] / c[2];
+    const T r2 = x * x + y * y;
+    const T radial = 1.0 + r2 * (intr[4] + r2 * (intr[5] + r2 * intr[8]));
+    const T xd = x * radial + 2.0 * intr[6] * x * y + intr[7] * (r2 + 2.0 * x * x);
+    const T yd = y * radial + intr[6] * (r2 + 2.0 * y * y) + 2.0 * intr[7] * x * y;
+    r[0] = intr[0] * xd + intr[2] - uv_.x();
+    r[1] = intr[1] * yd + intr[3] - uv_.y();
+    return true;
+  }
+  Eigen::Vector3d X_;
+  Eigen::Vector2d uv_;
+};
+
+Eigen::Matrix3d Homography(const CalibrationView& v) {
+  const size_t n = v.object.size();
+  // Hartley normalisation of both point sets.
+  auto normaliser = [](const std::vector<Eigen::Vector2d>& pts) {
+    Eigen::Vector2d m = Eigen::Vector2d::Zero();
+    for (const auto& p : pts) m += p;
+    m /= static_cast<double>(pts.size());
+    double s = 0;
+    for (const auto& p : pts) s += (p - m).norm();
+    s = std::sqrt(2.0) * static_cast<double>(pts.size()) / std::max(s, 1e-12);
+    Eigen::Matrix3d T;
+    T << s, 0, -s * m.x(), 0, s, -s * m.y(), 0, 0, 1;
+    return T;
+  };
+  std::vector<Eigen::Vector2d> obj, img;
+  for (size_t i = 0; i < n; ++i) {
+    obj.push_back(v.object[i].head<2>());
+    img.push_back(v.image[i]);
+  }
+  const Eigen::Matrix3d To = normaliser(obj), Ti = normaliser(img);
+  Eigen::MatrixXd A(2 * n, 9);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d o = To * obj[i].homogeneous();
+    const Eigen::Vector3d p = Ti * img[i].homogeneous();
+    const double X = o.x(), Y = o.y(), u = p.x(), w = p.y();
+    A.row(static_cast<long>(2 * i)) << X, Y, 1, 0, 0, 0, -u * X, -u * Y, -u;
+    A.row(static_cast<long>(2 * i + 1)) << 0, 0, 0, X, Y, 1, -w * X, -w * Y, -w;
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::VectorXd h = svd.matrixV().col(8);
+  Eigen::Matrix3d H;
+  H << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8];
+  return Ti.inverse() * H * To;
+}
+
+Eigen::Matrix<double, 6, 1> Vij(const Eigen::Matrix3d& H, int i, int j) {
+  const Eigen::Vector3d a = H.col(i), b = H.col(j);
+  Eigen::Matrix<double, 6, 1> v;
+  v << a[0] * b[0], a[0] * b[1] + a[1] * b[0], a[1] * b[1], a[2] * b[0] + a[0] * b[2],
+      a[2] * b[1] + a[1] * b[2], a[2] * b[2];
+  return v;
+}
+
+}  // namespace
+
+std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open for reading");
+  std::string line;
+  int n = 0;
+  std::map<std::string, CalibrationView> views;
+  std::vector<std::string> order;
+  bool header = false;
+  while (std::getline(in, line)) {
+    ++n;
+    if (line.empty() || line[0] == '#') continue;
+    std::vector<std::string> cols;
+    std::stringstream ss(line);
+    std::string c;
+    while (std::getline(ss, c, ',')) cols.push_back(c);
+    const std::string where = path + ":" + std::to_string(n);
+    if (!header) {
+      if (cols.size() != 6 || cols[0] != "view" || cols[1] != "X" || cols[5].substr(0, 1) != "v") {
+        throw std::runtime_error(where + ": expected header 'view,X,Y,Z,u,v'");
+      }
+      header = true;
+      continue;
+    }
+    if (cols.size() != 6) throw std::runtime_error(where + ": expected 6 values, found " + std::to_string(cols.size()));
+    double v[5];
+    for (int k = 0; k < 5; ++k) {
+      try {
+        size_t used = 0;
+        v[k] = std::stod(cols[static_cast<size_t>(k + 1)], &used);
+      } catch (const std::exception&) {
+        throw std::runtime_error(where + ": column " + std::to_string(k + 2) + ": expected a number, got '" + cols[static_cast<size_t>(k + 1)] + "'");
+      }
+    }
+    if (!views.count(cols[0])) {
+      order.push_back(cols[0]);
+      views[cols[0]].name = "view " + cols[0];
+    }
+    views[cols[0]].object.emplace_back(v[0], v[1], v[2]);
+    views[cols[0]].image.emplace_back(v[3], v[4]);
+  }
+  if (!header) throw std::runtime_error(path + ": empty file (no header)");
+  std::vector<CalibrationView> out;
+  for (const auto& k : order) out.push_back(views[k]);
+  return out;
+}
+
+CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
+                                  const CalibrationOptions& o) {
+  if (o.width <= 0 || o.height <= 0) throw std::runtime_error("calibration: image size must be given (WxH)");
+  if (views_in.size() < 3) throw std::runtime_error("calibration: at least 3 views are needed, got " + std::to_string(views_in.size()));
+  // Planar boards: shift each view's plane to Z = 0.
+  std::vector<CalibrationView> views = views_in;
+  for (auto& v : views) {
+    if (v.object.size() < 6 || v.object.size() != v.image.size()) {
+      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " + std::to_string(v.object.size()));
+    }
+    const double z0 = v.object.front().z();
+    for (auto& p : v.object) {
+      if (std::abs(p.z() - z0) > 1e-9) throw std::runtime_error(v.name + ": board points are not planar (Z varies); give a planar board with constant Z");
+      p.z() = 0.0;
+    }
+    for (const auto& p : v.image) {
+      if (p.x() < -0.5 || p.y() < -0.5 || p.x() > o.width - 0.5 || p.y() > o.height - 0.5) {
+        std::ostringstream m;
+        m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the " << o.width << "x" << o.height << " image";
+        throw std::runtime_error(m.str());
+      }
+    }
+  }
+  // Zhang: V b = 0 for B = K^-T K^-1 (zero skew).
+  std::vector<Eigen::Matrix3d> Hs;
+  Eigen::MatrixXd V(2 * views.size() + 1, 6);
+  for (size_t i = 0; i < views.size(); ++i) {
+    Hs.push_back(Homography(views[i]));
+    V.row(static_cast<long>(2 * i)) = Vij(Hs[i], 0, 1).transpose();
+    V.row(static_cast<long>(2 * i + 1)) = (Vij(Hs[i], 0, 0) - Vij(Hs[i], 1, 1)).transpose();
+  }
+  V.row(static_cast<long>(2 * views.size())) << 0, 1, 0, 0, 0, 0;  // zero skew
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(V, Eigen::ComputeFullV);
+  Eigen::Matrix<double, 6, 1> b = svd.matrixV().col(5);
+  if (b[0] < 0) b = -b;
+  const double B11 = b[0], B12 = b[1], B22 = b[2], B13 = b[3], B23 = b[4], B33 = b[5];
+  const double v0 = (B12 * B13 - B11 * B23) / (B11 * B22 - B12 * B12);
+  const double lambda = B33 - (B13 * B13 + v0 * (B12 * B13 - B11 * B23)) / B11;
+  const double alpha = std::sqrt(lambda / B11);
+  const double beta = std::sqrt(lambda * B11 / (B11 * B22 - B12 * B12));
+  const double u0 = -B13 * alpha * alpha / lambda;
+  if (!std::isfinite(alpha) || !std::isfinite(beta) || !std::isfinite(u0) || !std::isfinite(v0)) {
+    throw std::runtime_error("calibration: degenerate views (all boards parallel, or too few orientations); tilt the board differently in each view");
+  }
+  Eigen::Matrix3d K;
+  K << alpha, 0, u0, 0, beta, v0, 0, 0, 1;
+  double intr[9] = {alpha, beta, u0, v0, 0, 0, 0, 0, 0};
+  std::vector<std::array<double, 6>> poses(views.size());
+  for (size_t i = 0; i < views.size(); ++i) {
+    const Eigen::Matrix3d M = K.inverse() * Hs[i];
+    double l = 1.0 / M.col(0).norm();
+    if (M(2, 2) * l < 0) l = -l;
+    Eigen::Matrix3d R;
+    R.col(0) = l * M.col(0);
+    R.col(1) = l * M.col(1);
+    R.col(2) = R.col(0).cross(R.col(1));
+    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    R = s.matrixU() * s.matrixV().transpose();
+    const Eigen::AngleAxisd aa(R);
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    const Eigen::Vector3d t = l * M.col(2);
+    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+  }
+  ceres::Problem problem;
+  int points = 0;
+  for (size_t i = 0; i < views.size(); ++i) {
+    for (size_t k = 0; k < views[i].object.size(); ++k) {
+      problem.AddResidualBlock(new ceres::AutoDiffCostFunction<Reprojection, 2, 9, 6>(
+                                   new Reprojection(views[i].object[k], views[i].image[k])),
+                               nullptr, intr, poses[i].data());
+      ++points;
+    }
+  }
+  if (!o.use_k3) problem.SetManifold(intr, new ceres::SubsetManifold(9, {8}));
+  ceres::Solver::Options sopt;
+  sopt.max_num_iterations = o.max_iterations;
+  sopt.linear_solver_type = ceres::DENSE_SCHUR;
+  sopt.function_tolerance = 1e-14;
+  sopt.parameter_tolerance = 1e-14;
+  sopt.logging_type = ceres::SILENT;
+  ceres::Solver::Summary summary;
+  ceres::Solve(sopt, &problem, &summary);
+
+  CalibrationResult r;
+  r.camera.width = o.width;
+  r.camera.height = o.height;
+  r.camera.fx = intr[0];
+  r.camera.fy = intr[1];
+  r.camera.cx = intr[2];
+  r.camera.cy = intr[3];
+  r.camera.k1 = intr[4];
+  r.camera.k2 = intr[5];
+  r.camera.p1 = intr[6];
+  r.camera.p2 = intr[7];
+  r.camera.k3 = intr[8];
+  r.points = points;
+  r.rms_px = std::sqrt(2.0 * summary.final_cost / points);
+  for (const auto& p : poses) {
+    Pose3 q;
+    const Eigen::Vector3d w(p[0], p[1], p[2]);
+    q.R = w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+    q.t = Eigen::Vector3d(p[3], p[4], p[5]);
+    r.board_poses.push_back(q);
+  }
+  ceres::Covariance::Options copt;
+  copt.algorithm_type = ceres::DENSE_SVD;
+  copt.null_space_rank = -1;
+  ceres::Covariance cov(copt);
+  std::vector<std::pair<const double*, const double*>> blocks = {{intr, intr}};
+  if (cov.Compute(blocks, &problem)) {
+    double C[81];
+    cov.GetCovarianceBlock(intr, intr, C);
+    const int dof = 2 * points - (o.use_k3 ? 9 : 8) - 6 * static_cast<int>(views.size());
+    const double s2 = dof > 0 ? 2.0 * summary.final_cost / dof : 1.0;
+    for (int i = 0; i < 9; ++i) r.sigma[i] = std::sqrt(std::max(0.0, C[i * 9 + i] * s2));
+    r.sigma_ok = true;
+  }
+  return r;
+}
+
+}  // namespace kincal::vision
