@@ -317,3 +317,52 @@ TEST(Calibration, BadInputNamesTheProblem) {
 
 }  // namespace
 }  // namespace kincal::vision
+
+namespace kincal::vision {
+namespace {
+
+TEST(Markers, PerspectiveBiasCorrectionOnAnObliqueView) {
+  // A camera looking at the floor 45 degrees off the vertical: the image of a marker's
+  // centre is off the centre of its image by a measurable amount; the correction removes it.
+  CameraModel cam = TestCamera();
+  FloorExtrinsics floor;
+  floor.R_cf = Eigen::AngleAxisd(M_PI - 0.8, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  floor.t_cf = Eigen::Vector3d(0.0, 0.0, 0.55);
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(5);
+  RenderOptions ro;
+  ro.noise_sigma = 0.0;
+  const Pose3 pose = TargetPose(floor, Eigen::Vector3d(0.0, 0.0, 0.4), 0.0);
+  const RenderedFrame fr = RenderTarget(cam, pose, layout, ro, rng);
+  auto markers = DetectMarkers(fr.image, DetectorOptions{});
+  ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+  double before = 0, after = 0;
+  for (const auto& m : markers) before = std::max(before, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  const double largest = CorrectPerspectiveBias(cam, pose, layout, &markers);
+  for (const auto& m : markers) after = std::max(after, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  EXPECT_GT(largest, 0.02);
+  EXPECT_GT(before, 0.02);
+  EXPECT_LT(after, 0.4 * before) << "before " << before << " after " << after;
+}
+
+TEST(Markers, TrackerSearchesNearTheLastTargetAndFallsBack) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(9);
+  MarkerTracker tracker(cam, layout, DetectorOptions{});
+  const FloorExtrinsics floor = Overhead();
+  for (int k = 0; k < 10; ++k) {
+    const Eigen::Vector3d q = k < 9 ? Eigen::Vector3d(0.01 * k, 0.0, 0.05 * k) : Eigen::Vector3d(-0.2, 0.2, 1.0);
+    const RenderedFrame fr = RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    const auto markers = tracker.Track(fr.image);
+    ASSERT_EQ(markers.size(), 4u) << k;
+    for (const auto& m : markers) EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+    if (k > 0 && k < 9) {
+      EXPECT_FALSE(tracker.last_was_full_frame()) << k;
+    }
+  }
+  EXPECT_EQ(tracker.full_frame_searches(), 2);  // the first frame and the jump
+}
+
+}  // namespace
+}  // namespace kincal::vision

@@ -1,9 +1,9 @@
 #include "kincal/vision/markers.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <complex>
 #include <functional>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
@@ -155,27 +155,30 @@ bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vec
   std::vector<bool> used(n, false);
   std::function<void(size_t)> rec = [&](size_t depth) {
     if (depth == m) {
-      // Similarity least squares in complex numbers, z = a * conj(w) + b: the camera sees
-      // the plate from its marked (+z) side, which mirrors the plate's (x, y) into the
-      // image's (right, down) axes.
+      // Affine least squares z = A w + b from the mirrored layout (the camera sees the
+      // plate from its marked +z side, which mirrors the plate's (x, y) into the image's
+      // (right, down) axes). Affine absorbs foreshortening of oblique views; det(A) > 0
+      // keeps the handedness, which makes the asymmetric layout unambiguous.
       Eigen::Vector2d ic = Eigen::Vector2d::Zero();
       for (size_t i = 0; i < m; ++i) ic += norm[choice[i]];
       ic /= static_cast<double>(m);
-      std::complex<double> num(0, 0);
-      double den = 0;
+      Eigen::Matrix2d WW = Eigen::Matrix2d::Zero(), ZW = Eigen::Matrix2d::Zero();
       for (size_t i = 0; i < m; ++i) {
-        const std::complex<double> w(layout.markers[i].x() - lc.x(), -(layout.markers[i].y() - lc.y()));
-        const std::complex<double> z(norm[choice[i]].x() - ic.x(), norm[choice[i]].y() - ic.y());
-        num += std::conj(w) * z;
-        den += std::norm(w);
+        const Eigen::Vector2d w(layout.markers[i].x() - lc.x(), -(layout.markers[i].y() - lc.y()));
+        const Eigen::Vector2d z = norm[choice[i]] - ic;
+        WW += w * w.transpose();
+        ZW += z * w.transpose();
       }
-      const std::complex<double> a = num / den;
+      const Eigen::Matrix2d A = ZW * WW.inverse();
+      if (A.determinant() <= 0) return;
+      Eigen::JacobiSVD<Eigen::Matrix2d> svd(A);
+      if (svd.singularValues()[1] < 0.2 * svd.singularValues()[0]) return;  // beyond ~78 deg
       double res = 0, scale = 0;
       for (size_t i = 0; i < m; ++i) {
-        const std::complex<double> w(layout.markers[i].x() - lc.x(), -(layout.markers[i].y() - lc.y()));
-        const std::complex<double> z(norm[choice[i]].x() - ic.x(), norm[choice[i]].y() - ic.y());
-        res += std::norm(z - a * w);
-        scale += std::norm(z);
+        const Eigen::Vector2d w(layout.markers[i].x() - lc.x(), -(layout.markers[i].y() - lc.y()));
+        const Eigen::Vector2d z = norm[choice[i]] - ic;
+        res += (z - A * w).squaredNorm();
+        scale += z.squaredNorm();
       }
       const double rel = std::sqrt(res / std::max(scale, 1e-300));
       if (rel < best) {
@@ -197,6 +200,72 @@ bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vec
   for (auto& mk : *markers) mk.id = -1;
   for (size_t i = 0; i < m; ++i) (*markers)[best_assign[i]].id = static_cast<int>(i);
   return true;
+}
+
+double CorrectPerspectiveBias(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
+                              std::vector<Marker>* markers) {
+  double largest = 0.0;
+  for (auto& m : *markers) {
+    if (m.id < 0 || m.id >= static_cast<int>(layout.markers.size())) continue;
+    const Eigen::Vector2d c = layout.markers[static_cast<size_t>(m.id)];
+    const Eigen::Vector2d centre = cam.Project(pose.R * Eigen::Vector3d(c.x(), c.y(), 0.0) + pose.t);
+    // Area centroid of the projected boundary polygon.
+    constexpr int kN = 96;
+    std::array<Eigen::Vector2d, kN> b;
+    for (int k = 0; k < kN; ++k) {
+      const double a = 2.0 * M_PI * k / kN;
+      const Eigen::Vector3d p(c.x() + layout.marker_radius_m * std::cos(a), c.y() + layout.marker_radius_m * std::sin(a), 0.0);
+      b[static_cast<size_t>(k)] = cam.Project(pose.R * p + pose.t);
+    }
+    double area = 0;
+    Eigen::Vector2d cen = Eigen::Vector2d::Zero();
+    for (int k = 0; k < kN; ++k) {
+      const auto& p0 = b[static_cast<size_t>(k)];
+      const auto& p1 = b[static_cast<size_t>((k + 1) % kN)];
+      const double cross = p0.x() * p1.y() - p1.x() * p0.y();
+      area += cross;
+      cen += (p0 + p1) * cross;
+    }
+    if (std::abs(area) < 1e-12) continue;
+    cen /= 3.0 * area;
+    const Eigen::Vector2d bias = cen - centre;
+    m.centre_px -= bias;
+    largest = std::max(largest, bias.norm());
+  }
+  return largest;
+}
+
+std::vector<Marker> MarkerTracker::Track(const cv::Mat& grey) {
+  std::vector<Marker> markers;
+  if (roi_.area() > 0) {
+    markers = DetectMarkers(grey, opt_, roi_);
+    full_frame_ = false;
+    if (!IdentifyTarget(cam_, layout_, &markers)) markers.clear();
+  }
+  if (markers.empty()) {
+    full_frame_ = true;
+    ++full_searches_;
+    markers = DetectMarkers(grey, opt_);
+    if (!IdentifyTarget(cam_, layout_, &markers)) {
+      roi_ = {};
+      return {};
+    }
+  }
+  std::vector<Marker> target;
+  double u0 = 1e300, v0 = 1e300, u1 = -1e300, v1 = -1e300;
+  for (const auto& m : markers) {
+    if (m.id < 0) continue;
+    target.push_back(m);
+    u0 = std::min(u0, m.centre_px.x() - m.diameter_px);
+    v0 = std::min(v0, m.centre_px.y() - m.diameter_px);
+    u1 = std::max(u1, m.centre_px.x() + m.diameter_px);
+    v1 = std::max(v1, m.centre_px.y() + m.diameter_px);
+  }
+  roi_ = cv::Rect(static_cast<int>(u0) - margin_, static_cast<int>(v0) - margin_,
+                  static_cast<int>(u1 - u0) + 2 * margin_, static_cast<int>(v1 - v0) + 2 * margin_) &
+         cv::Rect(0, 0, grey.cols, grey.rows);
+  std::sort(target.begin(), target.end(), [](const Marker& a, const Marker& b) { return a.id < b.id; });
+  return target;
 }
 
 }  // namespace kincal::vision

@@ -44,10 +44,38 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
                                   cv::Rect roi = {}, std::vector<Rejected>* rejected = nullptr);
 
 // Assigns layout ids: among the detections, the set of layout.markers.size() markers and
-// the correspondence whose similarity fit (in undistorted normalised coordinates) leaves
-// the smallest residual. Returns false when no assignment fits within `max_rms` (relative
+// the correspondence whose affine fit (in undistorted normalised coordinates, handedness
+// kept) leaves the smallest residual. Returns false when no assignment fits within `max_rms` (relative
 // to the target's size in the image).
 bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vector<Marker>* markers,
                     double max_rms = 0.05);
+
+// The centre of a projected circle is not the centre of its image (an ellipse, further
+// bent by distortion): given the target pose, moves each identified marker's measured
+// centre by (projected circle centre - area centroid of the projected disk). Returns the
+// largest correction applied, px.
+double CorrectPerspectiveBias(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
+                              std::vector<Marker>* markers);
+
+// Tracking: searches a region around the last target first and falls back to the whole
+// frame when the target is not found there.
+class MarkerTracker {
+ public:
+  MarkerTracker(CameraModel cam, TargetLayout layout, DetectorOptions opt, int margin_px = 24)
+      : cam_(std::move(cam)), layout_(std::move(layout)), opt_(opt), margin_(margin_px) {}
+  // Identified markers (ids set) or an empty vector when the target is not in the frame.
+  std::vector<Marker> Track(const cv::Mat& grey);
+  bool last_was_full_frame() const { return full_frame_; }
+  int64_t full_frame_searches() const { return full_searches_; }
+
+ private:
+  CameraModel cam_;
+  TargetLayout layout_;
+  DetectorOptions opt_;
+  int margin_;
+  cv::Rect roi_;
+  bool full_frame_ = true;
+  int64_t full_searches_ = 0;
+};
 
 }  // namespace kincal::vision
