@@ -13,5 +13,9 @@ Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);
 Command AddAnalyze(CLI::App& app);
 Command AddCamcal(CLI::App& app);
+Command AddTarget(CLI::App& app);
+Command AddRender(CLI::App& app);
+Command AddDetect(CLI::App& app);
+Command AddFloorcal(CLI::App& app);
 
 }  // namespace kincal::app

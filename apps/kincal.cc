@@ -43,6 +43,14 @@ int main(int argc, char** argv) {
   commands[analyze] = kincal::app::AddAnalyze(*analyze);
   auto* camcal = app.add_subcommand("camcal", "calibrate a camera from board images or points");
   commands[camcal] = kincal::app::AddCamcal(*camcal);
+  auto* target = app.add_subcommand("target", "draw the printable marker target (SVG)");
+  commands[target] = kincal::app::AddTarget(*target);
+  auto* render = app.add_subcommand("render", "render the target with the synthetic camera (PNG)");
+  commands[render] = kincal::app::AddRender(*render);
+  auto* detect = app.add_subcommand("detect", "show what the marker detector finds in an image");
+  commands[detect] = kincal::app::AddDetect(*detect);
+  auto* floorcal = app.add_subcommand("floorcal", "camera pose above the floor from a board image");
+  commands[floorcal] = kincal::app::AddFloorcal(*floorcal);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -20,6 +20,7 @@ struct TargetLayout {
   std::string name = "thesis";
   std::vector<Eigen::Vector2d> markers;  // centres in the target frame, m (plane z = 0)
   double marker_radius_m = 0.008;
+  Eigen::Vector2d plate_size_m{0.12, 0.08};  // printed plate, centred on the target origin
   bool dark_on_light = true;
   // The thesis plate: 80 x 120 mm, four markers in an asymmetric layout (one corner
   // marker moved inwards) so that correspondences and heading are unambiguous.
