@@ -40,7 +40,7 @@ LoweResult LowePose(std::span<const Eigen::Vector3d> object,
   if (n < 3 || normalized.size() != n) return r;
   Eigen::Matrix3d R = initial.R;
   Eigen::Vector3d D = initial.t;
-  Eigen::Matrix<double, 6, 6> H;
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
   for (int it = 0; it < max_iterations; ++it) {
     H.setZero();
     Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
@@ -114,7 +114,7 @@ PlanarPose GroundPlanePose(const FloorExtrinsics& floor, double target_height_m,
   const size_t n = object.size();
   if (n < 2 || normalized.size() != n) return r;
   Eigen::Vector3d q = initial;
-  Eigen::Matrix3d H;
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
   for (int it = 0; it < max_iterations; ++it) {
     H.setZero();
     Eigen::Vector3d g = Eigen::Vector3d::Zero();
