@@ -72,7 +72,8 @@ TEST_P(Undeclared, FindsNamesAndRecoversTheHiddenEffect) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
   const Recording rec = SimulateRecording(c, 100.0);
   const AnalyzeResult r = Analyze(rec, FastOptions(sc.model));
-  if (getenv("KINCAL_DEBUG")) WriteAnalysisReport(r, "/tmp/kdebug");
+  // KINCAL_DEBUG_DIR=DIR keeps the report of a failing case for inspection.
+  if (const char* dir = getenv("KINCAL_DEBUG_DIR")) WriteAnalysisReport(r, dir);
   std::string accepted;
   for (const auto& e : r.after.effects) accepted += e + " ";
   for (const auto& h : c.hidden) {

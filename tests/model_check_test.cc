@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <kincal/model_check_t.hpp>
+#include <lcm/lcm-cpp.hpp>
 #include <random>
 
 #include "kincal/estimation/online_calibrator.h"
@@ -46,6 +48,23 @@ TEST(ModelCheck, HiddenDelayIsNamed) {
   EXPECT_FALSE(v.consistent) << v.evidence;
   EXPECT_EQ(v.suspected_effect, "time_offset") << v.evidence;
   EXPECT_GT(v.confidence, 0.5);
+}
+
+TEST(ModelCheck, VerdictTravelsAsAnLcmMessage) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  struct Sink {
+    std::vector<model_check_t> got;
+    void On(const lcm::ReceiveBuffer*, const std::string&, const model_check_t* m) { got.push_back(*m); }
+  } sink;
+  lcm.subscribe("KINCAL_MODEL_CHECK", &Sink::On, &sink);
+  const model_check_t msg = ToMessage(RunOnline(0.1, 3), "unicycle", 123);
+  ASSERT_EQ(lcm.publish("KINCAL_MODEL_CHECK", &msg), 0);
+  ASSERT_GE(lcm.handleTimeout(100), 0);
+  ASSERT_EQ(sink.got.size(), 1u);
+  EXPECT_EQ(sink.got[0].suspected_effect, "time_offset");
+  EXPECT_EQ(sink.got[0].consistent, 0);
+  EXPECT_EQ(sink.got[0].model, "unicycle");
 }
 
 TEST(ModelCheck, CleanRobotYieldsNoVerdict) {

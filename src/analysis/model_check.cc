@@ -1,5 +1,7 @@
 #include "kincal/analysis/model_check.h"
 
+#include <kincal/model_check_t.hpp>
+
 #include <cmath>
 #include <sstream>
 
@@ -115,6 +117,21 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   ev << "; window " << n << " updates";
   v.evidence = ev.str();
   return v;
+}
+
+model_check_t ToMessage(const ModelCheckVerdict& v, const std::string& model, int64_t utime) {
+  model_check_t m{};
+  m.schema_version = 1;
+  m.utime = utime;
+  m.model = model;
+  m.consistent = v.consistent ? 1 : 0;
+  m.nis_mean = v.nis_mean;
+  m.nis_expected = v.nis_expected;
+  m.window = v.window;
+  m.suspected_effect = v.suspected_effect;
+  m.confidence = v.confidence;
+  m.evidence = v.evidence;
+  return m;
 }
 
 }  // namespace kincal

@@ -20,6 +20,7 @@
 #include "kincal/time.h"
 
 namespace kincal {
+class model_check_t;  // generated from lcm/model_check_t.lcm
 
 struct ModelCheckOptions {
   double lookback_s = 0.3;   // command change measured over this interval before a pose
@@ -56,5 +57,8 @@ class ModelCheck {
   int count_ = 0;
   int next_ = 0;
 };
+
+// The verdict as the LCM message the daemon publishes (`utime`: us, host realtime clock).
+model_check_t ToMessage(const ModelCheckVerdict& v, const std::string& model, int64_t utime);
 
 }  // namespace kincal
