@@ -50,7 +50,7 @@ Command AddTarget(CLI::App& app) {
 
 Command AddRender(CLI::App& app) {
   struct Args {
-    std::string out, intrinsics;
+    std::string out, intrinsics, intrinsics_out, board;
     double x = 0, y = 0, theta = 0, height = 1.5, target_height = 0.1, noise = 1.0;
     uint64_t seed = 1;
   };
@@ -63,6 +63,9 @@ Command AddRender(CLI::App& app) {
   app.add_option("--camera-height", a->height, "nadir camera height above the floor, m")->capture_default_str();
   app.add_option("--noise", a->noise, "image noise, grey levels")->capture_default_str();
   app.add_option("--seed", a->seed, "noise seed")->capture_default_str();
+  app.add_option("--board", a->board,
+                 "render a circle board lying on the floor instead: circles|acircles:COLSxROWS:PITCH");
+  app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
   return [a]() -> int {
     vision::CameraModel cam;
     if (!a->intrinsics.empty()) {
@@ -83,10 +86,28 @@ Command AddRender(CLI::App& app) {
     std::mt19937_64 rng(a->seed);
     vision::RenderOptions ro;
     ro.noise_sigma = a->noise;
-    const auto fr = vision::RenderTarget(cam, pose, vision::TargetLayout::Thesis(), ro, rng);
+    vision::TargetLayout layout = vision::TargetLayout::Thesis();
+    if (!a->board.empty()) {
+      static const std::regex re(R"((circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
+      std::smatch m;
+      if (!std::regex_match(a->board, m, re)) throw std::runtime_error("--board '" + a->board + "': expected circles|acircles:COLSxROWS:PITCH");
+      const bool asym = m[1] == "acircles";
+      const int cols = std::stoi(m[2]), rows = std::stoi(m[3]);
+      const double pitch = std::stod(m[4]);
+      layout.name = a->board;
+      layout.markers.clear();
+      for (int r = 0; r < rows; ++r) {
+        for (int c = 0; c < cols; ++c) layout.markers.emplace_back((asym ? 2 * c + r % 2 : c) * pitch, r * pitch);
+      }
+      layout.marker_radius_m = pitch / 4.0;
+      pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // lying on the floor
+    }
+    if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
+    const auto fr = vision::RenderTarget(cam, pose, layout, ro, rng);
     if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
     std::cout << std::fixed << std::setprecision(4);
-    for (size_t i = 0; i < fr.centres.size(); ++i) {
+    for (size_t i = 0; i < fr.centres.size() && a->board.empty(); ++i) {
       std::cout << "M" << i + 1 << " true centre (" << fr.centres[i].x() << ", " << fr.centres[i].y() << ") px\n";
     }
     return 0;
@@ -204,6 +225,8 @@ Command AddFloorcal(CLI::App& app) {
     vision::Pose3 init;
     if (!vision::PlanarInitialPose(obj, norm, &init)) throw std::runtime_error(a->image + ": degenerate board view");
     auto r = vision::LowePose(obj, norm, init, cam.fx, 1.0);
+    // Floor frame with z up, towards the camera: flip the board frame if its z points down.
+    if ((-(r.pose.R.transpose() * r.pose.t)).z() < 0) r.pose.R = r.pose.R * Eigen::Vector3d(1, -1, -1).asDiagonal();
     // Scale the covariance by the observed reprojection error (sigma = rms).
     const double s2 = std::max(r.rms_px * r.rms_px, 1e-6);
     const Eigen::Matrix<double, 6, 6> cov = r.covariance * s2;
@@ -217,7 +240,7 @@ Command AddFloorcal(CLI::App& app) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C.at<double>(i, j) = cov(i, j);
     fs << "R_cf" << R << "t_cf" << t << "covariance_t_rot" << C << "rms_px" << r.rms_px;
-    std::cout << std::setprecision(5) << "camera height above the floor plane: " << -(r.pose.R.transpose() * r.pose.t).z()
+    std::cout << std::fixed << std::setprecision(4) << "camera height above the floor plane: " << (-(r.pose.R.transpose() * r.pose.t)).z()
               << " m; t_cf = [" << r.pose.t.transpose() << "] m (1-sigma " << std::sqrt(cov(0, 0)) << ", "
               << std::sqrt(cov(1, 1)) << ", " << std::sqrt(cov(2, 2)) << "); rms " << r.rms_px << " px\nwrote " << a->out << "\n";
     return 0;
