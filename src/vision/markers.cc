@@ -7,6 +7,9 @@
 #include <functional>
 #include <numeric>
 #include <opencv2/imgproc.hpp>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace kincal::vision {
 
@@ -19,6 +22,150 @@ bool DetectorOptions::IsValid(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// One connected component, accumulated from its horizontal runs.
+struct Blob {
+  int parent;
+  int64_t area = 0;
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+};
+
+int Find(std::vector<Blob>& b, int i) {
+  while (b[static_cast<size_t>(i)].parent != i) {
+    b[static_cast<size_t>(i)].parent = b[static_cast<size_t>(b[static_cast<size_t>(i)].parent)].parent;
+    i = b[static_cast<size_t>(i)].parent;
+  }
+  return i;
+}
+
+struct Run {
+  int x0, x1, blob;
+};
+
+// Otsu threshold from a histogram of every other pixel of every other row.
+int OtsuThreshold(const cv::Mat& view) {
+  std::array<int64_t, 256> hist{};
+  int64_t n = 0;
+  for (int y = 0; y < view.rows; y += 2) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = 0; x < view.cols; x += 2) {
+      ++hist[row[x]];
+      ++n;
+    }
+  }
+  double sum = 0;
+  for (int i = 0; i < 256; ++i) sum += static_cast<double>(i) * static_cast<double>(hist[static_cast<size_t>(i)]);
+  double sum_b = 0, best = -1;
+  int64_t w_b = 0;
+  int thr = 128;
+  for (int t = 0; t < 256; ++t) {
+    w_b += hist[static_cast<size_t>(t)];
+    if (w_b == 0) continue;
+    const int64_t w_f = n - w_b;
+    if (w_f == 0) break;
+    sum_b += static_cast<double>(t) * static_cast<double>(hist[static_cast<size_t>(t)]);
+    const double m_b = sum_b / static_cast<double>(w_b), m_f = (sum - sum_b) / static_cast<double>(w_f);
+    const double between = static_cast<double>(w_b) * static_cast<double>(w_f) * (m_b - m_f) * (m_b - m_f);
+    if (between > best) {
+      best = between;
+      thr = t;
+    }
+  }
+  return thr;
+}
+
+// Foreground test: dark-on-light markers are p <= thr, light-on-dark p > thr.
+template <bool kDark>
+inline bool Fg(uint8_t p, int thr) {
+  return kDark ? p <= thr : p > thr;
+}
+
+// First x >= x in [x, w) that is foreground (w if none); skips 16 background pixels at a
+// time with SSE2 where available.
+template <bool kDark>
+inline int NextFg(const uint8_t* row, int x, int w, int thr) {
+#ifdef __SSE2__
+  const __m128i t = _mm_set1_epi8(static_cast<char>(kDark ? thr : std::min(thr + 1, 255)));
+  while (x + 16 <= w) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+    const __m128i hit = kDark ? _mm_cmpeq_epi8(_mm_min_epu8(v, t), v) : _mm_cmpeq_epi8(_mm_max_epu8(v, t), v);
+    if (_mm_movemask_epi8(hit) != 0) break;
+    x += 16;
+  }
+#endif
+  while (x < w && !Fg<kDark>(row[x], thr)) ++x;
+  return x;
+}
+
+template <bool kDark>
+void LabelRuns(const cv::Mat& view, int thr, std::vector<Blob>* blobs) {
+  std::vector<Run> prev, cur;
+  for (int y = 0; y < view.rows; ++y) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    cur.clear();
+    int x = 0;
+    const int w = view.cols;
+    size_t j = 0;  // first run of the previous row that may touch
+    while ((x = NextFg<kDark>(row, x, w, thr)) < w) {
+      const int x0 = x;
+      while (x < w && Fg<kDark>(row[x], thr)) ++x;
+      const int x1 = x - 1;
+      int blob = -1;
+      while (j < prev.size() && prev[j].x1 < x0 - 1) ++j;
+      for (size_t k = j; k < prev.size() && prev[k].x0 <= x1 + 1; ++k) {
+        const int r = Find(*blobs, prev[k].blob);
+        if (blob < 0) {
+          blob = r;
+        } else if (r != blob) {
+          (*blobs)[static_cast<size_t>(r)].parent = blob;
+        }
+      }
+      if (blob < 0) {
+        blob = static_cast<int>(blobs->size());
+        blobs->push_back(Blob{blob});
+      }
+      Blob& b = (*blobs)[static_cast<size_t>(blob)];
+      const double n = x1 - x0 + 1;
+      const double s1 = n * (x0 + x1) * 0.5;
+      auto s2 = [](double k) { return k * (k + 1) * (2 * k + 1) / 6.0; };
+      b.area += x1 - x0 + 1;
+      b.sx += s1;
+      b.sy += n * y;
+      b.sxx += s2(x1) - s2(x0 - 1);
+      b.syy += n * y * y;
+      b.sxy += s1 * y;
+      b.x0 = std::min(b.x0, x0);
+      b.x1 = std::max(b.x1, x1);
+      b.y0 = std::min(b.y0, y);
+      b.y1 = std::max(b.y1, y);
+      cur.push_back({x0, x1, blob});
+    }
+    std::swap(prev, cur);
+  }
+  // Merge the statistics of every blob into its root.
+  for (size_t i = 0; i < blobs->size(); ++i) {
+    const int r = Find(*blobs, static_cast<int>(i));
+    if (r == static_cast<int>(i)) continue;
+    Blob& a = (*blobs)[static_cast<size_t>(r)];
+    Blob& b = (*blobs)[i];
+    a.area += b.area;
+    a.sx += b.sx;
+    a.sy += b.sy;
+    a.sxx += b.sxx;
+    a.syy += b.syy;
+    a.sxy += b.sxy;
+    a.x0 = std::min(a.x0, b.x0);
+    a.x1 = std::max(a.x1, b.x1);
+    a.y0 = std::min(a.y0, b.y0);
+    a.y1 = std::max(a.y1, b.y1);
+    b.area = 0;
+  }
+}
+
+}  // namespace
+
 std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& opt, cv::Rect roi,
                                   std::vector<Rejected>* rejected) {
   CV_Assert(grey.type() == CV_8UC1);
@@ -27,53 +174,44 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
   std::vector<Marker> out;
   if (roi.area() == 0) return out;
   const cv::Mat view = grey(roi);
-  cv::Mat bin;
-  const int type = opt.dark_on_light ? cv::THRESH_BINARY_INV : cv::THRESH_BINARY;
-  const double thr = opt.threshold >= 0
-                         ? cv::threshold(view, bin, opt.threshold, 255, type)
-                         : cv::threshold(view, bin, 0, 255, type | cv::THRESH_OTSU);
-  cv::Mat labels, stats, centroids;
-  const int n = cv::connectedComponentsWithStats(bin, labels, stats, centroids, 8, CV_32S);
-  for (int k = 1; k < n; ++k) {
-    const int area = stats.at<int>(k, cv::CC_STAT_AREA);
-    const Eigen::Vector2d c0(centroids.at<double>(k, 0) + roi.x, centroids.at<double>(k, 1) + roi.y);
+  const int thr = opt.threshold >= 0 ? opt.threshold : OtsuThreshold(view);
+  thread_local std::vector<Blob> blobs;
+  blobs.clear();
+  if (opt.dark_on_light) {
+    LabelRuns<true>(view, thr, &blobs);
+  } else {
+    LabelRuns<false>(view, thr, &blobs);
+  }
+  for (size_t k = 0; k < blobs.size(); ++k) {
+    const Blob& b = blobs[k];
+    if (b.parent != static_cast<int>(k) || b.area == 0) continue;
+    const double area = static_cast<double>(b.area);
+    const double mx = b.sx / area, my = b.sy / area;
+    const Eigen::Vector2d c0(mx + roi.x, my + roi.y);
     auto reject = [&](const std::string& why) {
       if (rejected != nullptr) rejected->push_back({c0, why});
     };
-    if (area < opt.min_area_px) {
-      reject("area " + std::to_string(area) + " < " + std::to_string(opt.min_area_px));
+    if (b.area < opt.min_area_px) {
+      if (b.area >= 4) reject("area " + std::to_string(b.area) + " < " + std::to_string(opt.min_area_px));
       continue;
     }
-    if (area > opt.max_area_px) {
-      reject("area " + std::to_string(area) + " > " + std::to_string(opt.max_area_px));
+    if (b.area > opt.max_area_px) {
+      reject("area " + std::to_string(b.area) + " > " + std::to_string(opt.max_area_px));
       continue;
     }
-    const int bx = stats.at<int>(k, cv::CC_STAT_LEFT), by = stats.at<int>(k, cv::CC_STAT_TOP);
-    const int bw = stats.at<int>(k, cv::CC_STAT_WIDTH), bh = stats.at<int>(k, cv::CC_STAT_HEIGHT);
+    const int bx = b.x0, by = b.y0, bw = b.x1 - b.x0 + 1, bh = b.y1 - b.y0 + 1;
     if (bx == 0 || by == 0 || bx + bw >= view.cols || by + bh >= view.rows) {
       reject("touches the search border");
       continue;
     }
     // Second moments of the binary blob: ellipse axes.
-    double sxx = 0, syy = 0, sxy = 0;
-    const double mx = centroids.at<double>(k, 0), my = centroids.at<double>(k, 1);
-    for (int y = by; y < by + bh; ++y) {
-      const int* lab = labels.ptr<int>(y);
-      for (int x = bx; x < bx + bw; ++x) {
-        if (lab[x] != k) continue;
-        sxx += (x - mx) * (x - mx);
-        syy += (y - my) * (y - my);
-        sxy += (x - mx) * (y - my);
-      }
-    }
-    sxx /= area;
-    syy /= area;
-    sxy /= area;
+    const double sxx = b.sxx / area - mx * mx, syy = b.syy / area - my * my, sxy = b.sxy / area - mx * my;
     const double tr = sxx + syy, det = sxx * syy - sxy * sxy;
     const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
-    const double l1 = 0.5 * tr + disc, l2 = std::max(0.5 * tr - disc, 1e-12);
+    const double l1 = std::max(0.5 * tr + disc, 1e-12), l2 = std::max(0.5 * tr - disc, 1e-12);
     const double circ = std::sqrt(l2 / l1);
-    const double ellipse_area = 4.0 * M_PI * std::sqrt(l1 * l2);
+    // A pixelated disk's moments include each pixel's own spread (1/12 per axis).
+    const double ellipse_area = 4.0 * M_PI * std::sqrt(std::max(l1 - 1.0 / 12.0, 1e-12) * std::max(l2 - 1.0 / 12.0, 1e-12));
     const double fill = area / ellipse_area;
     if (circ < opt.min_circularity) {
       reject("circularity " + std::to_string(circ).substr(0, 4));
@@ -84,10 +222,13 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       continue;
     }
     // Intensity-weighted centre over the blob's box grown by 2 px: background level from
-    // the box border, marker level from the blob's darkest (brightest) quarter.
+    // the box border (median), marker level from the darkest (brightest) quarter of the
+    // foreground pixels inside the box.
     const int x0 = std::max(0, bx - 2), y0 = std::max(0, by - 2);
     const int x1 = std::min(view.cols - 1, bx + bw + 1), y1 = std::min(view.rows - 1, by + bh + 1);
-    std::vector<double> border;
+    thread_local std::vector<double> border, inner;
+    border.clear();
+    inner.clear();
     for (int x = x0; x <= x1; ++x) {
       border.push_back(view.at<uint8_t>(y0, x));
       border.push_back(view.at<uint8_t>(y1, x));
@@ -98,10 +239,10 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
     }
     std::nth_element(border.begin(), border.begin() + static_cast<long>(border.size() / 2), border.end());
     const double bg = border[border.size() / 2];
-    std::vector<double> inner;
     for (int y = by; y < by + bh; ++y) {
+      const uint8_t* row = view.ptr<uint8_t>(y);
       for (int x = bx; x < bx + bw; ++x) {
-        if (labels.at<int>(y, x) == k) inner.push_back(view.at<uint8_t>(y, x));
+        if (opt.dark_on_light ? row[x] <= thr : row[x] > thr) inner.push_back(row[x]);
       }
     }
     const size_t q = inner.size() / 4;
@@ -117,9 +258,11 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       continue;
     }
     double sw = 0, su = 0, sv = 0;
+    const double inv = 1.0 / span;
     for (int y = y0; y <= y1; ++y) {
+      const uint8_t* row = view.ptr<uint8_t>(y);
       for (int x = x0; x <= x1; ++x) {
-        const double w = std::clamp((bg - view.at<uint8_t>(y, x)) / span, 0.0, 1.0);
+        const double w = std::clamp((bg - row[x]) * inv, 0.0, 1.0);
         sw += w;
         su += w * x;
         sv += w * y;
@@ -130,7 +273,6 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
     m.area_px = sw;
     m.diameter_px = 2.0 * std::sqrt(sw / M_PI);
     out.push_back(m);
-    (void)thr;
   }
   return out;
 }
