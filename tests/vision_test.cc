@@ -366,3 +366,31 @@ TEST(Markers, TrackerSearchesNearTheLastTargetAndFallsBack) {
 
 }  // namespace
 }  // namespace kincal::vision
+
+namespace kincal::vision {
+namespace {
+
+TEST(Markers, TwoRobotsToldApartByTheirLayouts) {
+  const CameraModel cam = TestCamera();
+  TargetLayout a = TargetLayout::Thesis();
+  TargetLayout b;
+  b.name = "second";
+  b.markers = {{0.04, 0.03}, {0.04, -0.03}, {-0.04, 0.0}, {0.0, -0.03}};  // a different shape
+  std::mt19937_64 rng(4);
+  const FloorExtrinsics floor = Overhead();
+  RenderOptions ro;
+  const RenderedFrame fa = RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(-0.12, 0.05, 0.4), 0.1), a, ro, rng);
+  const RenderedFrame fb = RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(0.13, -0.06, 2.2), 0.1), b, ro, rng);
+  cv::Mat both;
+  cv::min(fa.image, fb.image, both);  // dark markers of both robots in one frame
+  const auto detections = DetectMarkers(both, DetectorOptions{});
+  ASSERT_EQ(detections.size(), 8u);
+  const auto targets = IdentifyTargets(cam, {a, b}, detections);
+  ASSERT_EQ(targets[0].size(), 4u);
+  ASSERT_EQ(targets[1].size(), 4u);
+  for (const auto& m : targets[0]) EXPECT_LT((m.centre_px - fa.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  for (const auto& m : targets[1]) EXPECT_LT((m.centre_px - fb.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+}
+
+}  // namespace
+}  // namespace kincal::vision

@@ -344,6 +344,35 @@ bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vec
   return true;
 }
 
+std::vector<std::vector<Marker>> IdentifyTargets(const CameraModel& cam,
+                                                 const std::vector<TargetLayout>& layouts,
+                                                 const std::vector<Marker>& detections,
+                                                 double max_rms) {
+  std::vector<std::vector<Marker>> out(layouts.size());
+  std::vector<Marker> pool = detections;
+  // Layouts with more markers first: they are the most constrained.
+  std::vector<size_t> order(layouts.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return layouts[a].markers.size() > layouts[b].markers.size();
+  });
+  for (size_t li : order) {
+    std::vector<Marker> trial = pool;
+    if (!IdentifyTarget(cam, layouts[li], &trial, max_rms)) continue;
+    std::vector<Marker> rest;
+    for (const auto& m : trial) {
+      if (m.id >= 0) {
+        out[li].push_back(m);
+      } else {
+        rest.push_back(m);
+      }
+    }
+    std::sort(out[li].begin(), out[li].end(), [](const Marker& a, const Marker& b) { return a.id < b.id; });
+    pool = rest;
+  }
+  return out;
+}
+
 double CorrectPerspectiveBias(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
                               std::vector<Marker>* markers) {
   double largest = 0.0;

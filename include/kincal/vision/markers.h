@@ -50,6 +50,14 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
 bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vector<Marker>* markers,
                     double max_rms = 0.05);
 
+// Several targets (several robots) in one view, told apart by their layouts: each layout
+// in turn takes the best-fitting unassigned detections. Returns, per layout, its markers
+// (ids set, sorted by id) or an empty vector when that target is not in view.
+std::vector<std::vector<Marker>> IdentifyTargets(const CameraModel& cam,
+                                                 const std::vector<TargetLayout>& layouts,
+                                                 const std::vector<Marker>& detections,
+                                                 double max_rms = 0.05);
+
 // The centre of a projected circle is not the centre of its image (an ellipse, further
 // bent by distortion): given the target pose, moves each identified marker's measured
 // centre by (projected circle centre - area centroid of the projected disk). Returns the
