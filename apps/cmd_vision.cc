@@ -51,11 +51,12 @@ Command AddTarget(CLI::App& app) {
 Command AddRender(CLI::App& app) {
   struct Args {
     std::string out, intrinsics, intrinsics_out, board;
-    double x = 0, y = 0, theta = 0, height = 1.5, target_height = 0.1, noise = 1.0;
+    double x = 0, y = 0, theta = 0, height = 1.5, target_height = 0.1, noise = 1.0, tilt = 0;
     uint64_t seed = 1;
   };
   auto a = std::make_shared<Args>();
   app.add_option("--out", a->out, "PNG to write")->required();
+  app.add_option("--tilt", a->tilt, "with --board: tilt of the board about its x axis, rad (calibration views)");
   app.add_option("--intrinsics", a->intrinsics, "camera YAML (default: 640x480, f = 820 px)");
   app.add_option("--x", a->x, "target x on the floor, m");
   app.add_option("--y", a->y, "target y on the floor, m");
@@ -100,8 +101,9 @@ Command AddRender(CLI::App& app) {
         for (int c = 0; c < cols; ++c) layout.markers.emplace_back((asym ? 2 * c + r % 2 : c) * pitch, r * pitch);
       }
       layout.marker_radius_m = pitch / 4.0;
-      pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // lying on the floor
+      pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
+               Eigen::AngleAxisd(a->tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
+      pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // on the floor (tilted about x)
     }
     if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
     const auto fr = vision::RenderTarget(cam, pose, layout, ro, rng);

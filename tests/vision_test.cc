@@ -394,3 +394,54 @@ TEST(Markers, TwoRobotsToldApartByTheirLayouts) {
 
 }  // namespace
 }  // namespace kincal::vision
+
+#include <opencv2/features2d.hpp>
+
+namespace kincal::vision {
+namespace {
+
+TEST(Markers, LightOnDarkAndMoreAccurateThanSimpleBlobDetector) {
+  const CameraModel cam = TestCamera();
+  TargetLayout layout = TargetLayout::Thesis();
+  layout.dark_on_light = false;
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> U(-0.2, 0.2);
+  DetectorOptions dopt;
+  dopt.dark_on_light = false;
+  cv::SimpleBlobDetector::Params bp;
+  bp.blobColor = 255;
+  bp.minArea = 10;
+  auto blob = cv::SimpleBlobDetector::create(bp);
+  double ours = 0, theirs = 0;
+  int n = 0, m_theirs = 0;
+  for (int f = 0; f < 10; ++f) {
+    const RenderedFrame fr = RenderTarget(cam, TargetPose(Overhead(), Eigen::Vector3d(U(rng), U(rng), 10 * U(rng)), 0.1),
+                                          layout, RenderOptions{}, rng);
+    auto markers = DetectMarkers(fr.image, dopt);
+    ASSERT_EQ(markers.size(), 4u);
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+    for (const auto& mk : markers) {
+      ours += (mk.centre_px - fr.centres[static_cast<size_t>(mk.id)]).squaredNorm();
+      ++n;
+    }
+    std::vector<cv::KeyPoint> kp;
+    blob->detect(fr.image, kp);
+    for (const auto& c : fr.centres) {
+      double best = 1e9;
+      for (const auto& k : kp) best = std::min(best, (Eigen::Vector2d(k.pt.x, k.pt.y) - c).squaredNorm());
+      if (best < 4.0) {
+        theirs += best;
+        ++m_theirs;
+      }
+    }
+  }
+  ASSERT_GT(m_theirs, 0);
+  const double rms_ours = std::sqrt(ours / n), rms_theirs = std::sqrt(theirs / m_theirs);
+  RecordProperty("rms_ours_px", std::to_string(rms_ours));
+  RecordProperty("rms_simpleblob_px", std::to_string(rms_theirs));
+  EXPECT_LT(rms_ours, 0.03);
+  EXPECT_LT(rms_ours, rms_theirs) << "ours " << rms_ours << " SimpleBlobDetector " << rms_theirs;
+}
+
+}  // namespace
+}  // namespace kincal::vision
