@@ -8,18 +8,60 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <regex>
+#include <yaml-cpp/yaml.h>
 
 #include "commands.h"
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
 
 namespace kincal::app {
+namespace {
+
+// Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
+vision::TargetLayout LoadLayout(const std::string& path) {
+  if (path.empty()) return vision::TargetLayout::Thesis();
+  YAML::Node n;
+  try {
+    n = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  vision::TargetLayout t;
+  try {
+    t.name = n["name"] ? n["name"].as<std::string>() : path;
+    if (n["marker_radius_m"]) t.marker_radius_m = n["marker_radius_m"].as<double>();
+    if (n["dark_on_light"]) t.dark_on_light = n["dark_on_light"].as<bool>();
+    if (n["plate_size_m"]) {
+      const auto v = n["plate_size_m"].as<std::vector<double>>();
+      if (v.size() != 2) throw std::runtime_error(path + ": plate_size_m needs [width, height]");
+      t.plate_size_m = Eigen::Vector2d(v[0], v[1]);
+    }
+    if (!n["markers"]) throw std::runtime_error(path + ": missing key 'markers'");
+    t.markers.clear();
+    for (const auto& m : n["markers"]) {
+      const auto v = m.as<std::vector<double>>();
+      if (v.size() != 2) {
+        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) + ": a marker is [x, y] in metres");
+      }
+      t.markers.emplace_back(v[0], v[1]);
+    }
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  std::string error;
+  if (!t.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  return t;
+}
+
+}  // namespace
 
 Command AddTarget(CLI::App& app) {
   auto out = std::make_shared<std::string>();
+  auto layout_file = std::make_shared<std::string>();
   app.add_option("--out", *out, "SVG file to write (print at 100 % scale)")->required();
-  return [out]() -> int {
-    const auto layout = vision::TargetLayout::Thesis();
+  app.add_option("--layout", *layout_file, "target layout YAML (default: the thesis plate)");
+  return [out, layout_file]() -> int {
+    const auto layout = LoadLayout(*layout_file);
     const double x0 = -0.5 * layout.plate_size_m.x(), x1 = -x0;
     const double y0 = -0.5 * layout.plate_size_m.y(), y1 = -y0;
     const double pad = 0.0;
@@ -50,7 +92,7 @@ Command AddTarget(CLI::App& app) {
 
 Command AddRender(CLI::App& app) {
   struct Args {
-    std::string out, intrinsics, intrinsics_out, board;
+    std::string out, intrinsics, intrinsics_out, board, layout;
     double x = 0, y = 0, theta = 0, height = 1.5, target_height = 0.1, noise = 1.0, tilt = 0;
     uint64_t seed = 1;
   };
@@ -67,6 +109,7 @@ Command AddRender(CLI::App& app) {
   app.add_option("--board", a->board,
                  "render a circle board lying on the floor instead: circles|acircles:COLSxROWS:PITCH");
   app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
+  app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
   return [a]() -> int {
     vision::CameraModel cam;
     if (!a->intrinsics.empty()) {
@@ -87,7 +130,7 @@ Command AddRender(CLI::App& app) {
     std::mt19937_64 rng(a->seed);
     vision::RenderOptions ro;
     ro.noise_sigma = a->noise;
-    vision::TargetLayout layout = vision::TargetLayout::Thesis();
+    vision::TargetLayout layout = LoadLayout(a->layout);
     if (!a->board.empty()) {
       static const std::regex re(R"((circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
       std::smatch m;
@@ -118,7 +161,7 @@ Command AddRender(CLI::App& app) {
 
 Command AddDetect(CLI::App& app) {
   struct Args {
-    std::string image, overlay, intrinsics;
+    std::string image, overlay, intrinsics, layout;
     bool light_on_dark = false;
     int threshold = -1;
   };
@@ -128,6 +171,7 @@ Command AddDetect(CLI::App& app) {
   app.add_option("--intrinsics", a->intrinsics, "camera YAML: enables identification and pose");
   app.add_flag("--light-on-dark", a->light_on_dark, "markers brighter than the background");
   app.add_option("--threshold", a->threshold, "fixed threshold (default: Otsu)");
+  app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
   return [a]() -> int {
     const cv::Mat grey = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
     if (grey.empty()) throw std::runtime_error(a->image + ": unreadable image");
@@ -138,7 +182,7 @@ Command AddDetect(CLI::App& app) {
     auto markers = vision::DetectMarkers(grey, opt, {}, &rejected);
     cv::Mat vis;
     cv::cvtColor(grey, vis, cv::COLOR_GRAY2BGR);
-    const auto layout = vision::TargetLayout::Thesis();
+    const auto layout = LoadLayout(a->layout);
     std::string pose_text;
     if (!a->intrinsics.empty()) {
       const auto cam = vision::ReadCameraYaml(a->intrinsics);
