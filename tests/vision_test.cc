@@ -445,3 +445,38 @@ TEST(Markers, LightOnDarkAndMoreAccurateThanSimpleBlobDetector) {
 
 }  // namespace
 }  // namespace kincal::vision
+
+namespace kincal::vision {
+namespace {
+
+TEST(Calibration, ParallelBoardsAreDegenerate) {
+  // Three fronto-parallel views (the board only translated): Zhang's system has no unique
+  // solution; the error says how to fix the views.
+  const CameraModel cam = TestCamera();
+  std::vector<CalibrationView> views;
+  for (int v = 0; v < 3; ++v) {
+    CalibrationView view;
+    view.name = "view " + std::to_string(v);
+    const Eigen::Vector3d t(-0.1 + 0.02 * v, -0.06, 0.8 + 0.05 * v);
+    for (int r = 0; r < 6; ++r) {
+      for (int c = 0; c < 9; ++c) {
+        view.object.emplace_back(0.025 * c, 0.025 * r, 0.0);
+        view.image.push_back(cam.Project(view.object.back() + t));
+      }
+    }
+    views.push_back(view);
+  }
+  CalibrationOptions opt;
+  opt.width = cam.width;
+  opt.height = cam.height;
+  try {
+    const auto r = CalibrateCamera(views, opt);
+    // If the solver happens to return, its uncertainty must say it knows nothing.
+    EXPECT_TRUE(!r.sigma_ok || r.sigma[0] > 1.0) << "fx sigma " << r.sigma[0];
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("degenerate views"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace kincal::vision
