@@ -80,6 +80,55 @@ Eigen::Matrix<double, 6, 1> Vij(const Eigen::Matrix3d& H, int i, int j) {
   return v;
 }
 
+// DLT of a 3x4 projection from >= 6 non-coplanar points, decomposed into K (upper
+// triangular, K(2,2) = 1, positive diagonal), R and t with x ~ K (R X + t).
+bool DltView(const CalibrationView& v, Eigen::Matrix3d* K, Eigen::Matrix3d* R, Eigen::Vector3d* t) {
+  const size_t n = v.object.size();
+  Eigen::MatrixXd A(2 * n, 12);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector4d X = v.object[i].homogeneous();
+    const double u = v.image[i].x(), w = v.image[i].y();
+    A.row(static_cast<long>(2 * i)) << X.transpose(), Eigen::RowVector4d::Zero(), -u * X.transpose();
+    A.row(static_cast<long>(2 * i + 1)) << Eigen::RowVector4d::Zero(), X.transpose(), -w * X.transpose();
+  }
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::VectorXd p = svd.matrixV().col(11);
+  Eigen::Matrix<double, 3, 4> P;
+  P << p.segment<4>(0).transpose(), p.segment<4>(4).transpose(), p.segment<4>(8).transpose();
+  // RQ of M = P(:, 0:3) by QR of the flipped transpose.
+  Eigen::Matrix3d F;
+  F << 0, 0, 1, 0, 1, 0, 1, 0, 0;
+  const Eigen::Matrix3d M = P.leftCols<3>();
+  Eigen::HouseholderQR<Eigen::Matrix3d> qr((F * M).transpose());
+  const Eigen::Matrix3d Qp = qr.householderQ();
+  const Eigen::Matrix3d Rp = qr.matrixQR().triangularView<Eigen::Upper>();
+  Eigen::Matrix3d k = F * Rp.transpose() * F;
+  Eigen::Matrix3d r = F * Qp.transpose();
+  for (int i = 0; i < 3; ++i) {
+    if (k(i, i) < 0) {
+      k.col(i) *= -1.0;
+      r.row(i) *= -1.0;
+    }
+  }
+  // P = s K [R | t]: fix scale and the sign so that points are in front of the camera.
+  double scale = k(2, 2);
+  Eigen::Vector3d tt = k.inverse() * P.col(3);
+  if (r.determinant() < 0) {
+    r = -r;
+    tt = -tt;
+  }
+  k /= scale;
+  if (!k.allFinite() || !r.allFinite()) return false;
+  *K = k;
+  *R = r;
+  *t = tt;
+  // Points in front: flip the whole solution if the mean depth is negative.
+  double z = 0;
+  for (const auto& X : v.object) z += (r * X + tt).z();
+  if (z < 0) return false;
+  return true;
+}
+
 }  // namespace
 
 std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
@@ -128,69 +177,10 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
   return out;
 }
 
-CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
-                                  const CalibrationOptions& o) {
-  if (o.width <= 0 || o.height <= 0) throw std::runtime_error("calibration: image size must be given (WxH)");
-  if (views_in.size() < 3) throw std::runtime_error("calibration: at least 3 views are needed, got " + std::to_string(views_in.size()));
-  // Planar boards: shift each view's plane to Z = 0.
-  std::vector<CalibrationView> views = views_in;
-  for (auto& v : views) {
-    if (v.object.size() < 6 || v.object.size() != v.image.size()) {
-      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " + std::to_string(v.object.size()));
-    }
-    const double z0 = v.object.front().z();
-    for (auto& p : v.object) {
-      if (std::abs(p.z() - z0) > 1e-9) throw std::runtime_error(v.name + ": board points are not planar (Z varies); give a planar board with constant Z");
-      p.z() = 0.0;
-    }
-    for (const auto& p : v.image) {
-      if (p.x() < -0.5 || p.y() < -0.5 || p.x() > o.width - 0.5 || p.y() > o.height - 0.5) {
-        std::ostringstream m;
-        m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the " << o.width << "x" << o.height << " image";
-        throw std::runtime_error(m.str());
-      }
-    }
-  }
-  // Zhang: V b = 0 for B = K^-T K^-1 (zero skew).
-  std::vector<Eigen::Matrix3d> Hs;
-  Eigen::MatrixXd V(2 * views.size() + 1, 6);
-  for (size_t i = 0; i < views.size(); ++i) {
-    Hs.push_back(Homography(views[i]));
-    V.row(static_cast<long>(2 * i)) = Vij(Hs[i], 0, 1).transpose();
-    V.row(static_cast<long>(2 * i + 1)) = (Vij(Hs[i], 0, 0) - Vij(Hs[i], 1, 1)).transpose();
-  }
-  V.row(static_cast<long>(2 * views.size())) << 0, 1, 0, 0, 0, 0;  // zero skew
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(V, Eigen::ComputeFullV);
-  Eigen::Matrix<double, 6, 1> b = svd.matrixV().col(5);
-  if (b[0] < 0) b = -b;
-  const double B11 = b[0], B12 = b[1], B22 = b[2], B13 = b[3], B23 = b[4], B33 = b[5];
-  const double v0 = (B12 * B13 - B11 * B23) / (B11 * B22 - B12 * B12);
-  const double lambda = B33 - (B13 * B13 + v0 * (B12 * B13 - B11 * B23)) / B11;
-  const double alpha = std::sqrt(lambda / B11);
-  const double beta = std::sqrt(lambda * B11 / (B11 * B22 - B12 * B12));
-  const double u0 = -B13 * alpha * alpha / lambda;
-  if (!std::isfinite(alpha) || !std::isfinite(beta) || !std::isfinite(u0) || !std::isfinite(v0)) {
-    throw std::runtime_error("calibration: degenerate views (all boards parallel, or too few orientations); tilt the board differently in each view");
-  }
-  Eigen::Matrix3d K;
-  K << alpha, 0, u0, 0, beta, v0, 0, 0, 1;
-  double intr[9] = {alpha, beta, u0, v0, 0, 0, 0, 0, 0};
-  std::vector<std::array<double, 6>> poses(views.size());
-  for (size_t i = 0; i < views.size(); ++i) {
-    const Eigen::Matrix3d M = K.inverse() * Hs[i];
-    double l = 1.0 / M.col(0).norm();
-    if (M(2, 2) * l < 0) l = -l;
-    Eigen::Matrix3d R;
-    R.col(0) = l * M.col(0);
-    R.col(1) = l * M.col(1);
-    R.col(2) = R.col(0).cross(R.col(1));
-    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    R = s.matrixU() * s.matrixV().transpose();
-    const Eigen::AngleAxisd aa(R);
-    const Eigen::Vector3d w = aa.angle() * aa.axis();
-    const Eigen::Vector3d t = l * M.col(2);
-    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
-  }
+namespace {
+
+CalibrationResult Refine(const std::vector<CalibrationView>& views, const CalibrationOptions& o,
+                         double* intr, std::vector<std::array<double, 6>>& poses) {
   ceres::Problem problem;
   int points = 0;
   for (size_t i = 0; i < views.size(); ++i) {
@@ -246,6 +236,128 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
     r.sigma_ok = true;
   }
   return r;
+}
+
+CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
+                                   const std::vector<int>& dlt_views, const CalibrationOptions& o) {
+  Eigen::Matrix3d Ksum = Eigen::Matrix3d::Zero();
+  int used = 0;
+  std::vector<std::array<double, 6>> poses(views.size());
+  std::vector<bool> have(views.size(), false);
+  for (int i : dlt_views) {
+    Eigen::Matrix3d K, R;
+    Eigen::Vector3d t;
+    if (!DltView(views[static_cast<size_t>(i)], &K, &R, &t)) {
+      throw std::runtime_error(views[static_cast<size_t>(i)].name + ": degenerate view (the DLT found no camera in front of the points)");
+    }
+    Ksum += K;
+    ++used;
+    const Eigen::AngleAxisd aa(R);
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    poses[static_cast<size_t>(i)] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+    have[static_cast<size_t>(i)] = true;
+  }
+  const Eigen::Matrix3d K = Ksum / used;
+  double intr[9] = {K(0, 0), K(1, 1), K(0, 2), K(1, 2), 0, 0, 0, 0, 0};
+  // Planar views among them: extrinsics from their homography and this K.
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (have[i]) continue;
+    const Eigen::Matrix3d M = K.inverse() * Homography(views[i]);
+    double l = 1.0 / M.col(0).norm();
+    if (M(2, 2) * l < 0) l = -l;
+    Eigen::Matrix3d R;
+    R.col(0) = l * M.col(0);
+    R.col(1) = l * M.col(1);
+    R.col(2) = R.col(0).cross(R.col(1));
+    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    R = s.matrixU() * s.matrixV().transpose();
+    const Eigen::AngleAxisd aa(R);
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    const Eigen::Vector3d t = l * M.col(2);
+    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+  }
+  return Refine(views, o, intr, poses);
+}
+
+}  // namespace
+
+CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
+                                  const CalibrationOptions& o) {
+  if (o.width <= 0 || o.height <= 0) throw std::runtime_error("calibration: image size must be given (WxH)");
+  if (views_in.size() < 3) throw std::runtime_error("calibration: at least 3 views are needed, got " + std::to_string(views_in.size()));
+  // Planar boards: shift each view's plane to Z = 0.
+  std::vector<CalibrationView> views = views_in;
+  for (auto& v : views) {
+    if (v.object.size() < 6 || v.object.size() != v.image.size()) {
+      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " + std::to_string(v.object.size()));
+    }
+    const double z0 = v.object.front().z();
+    bool planar = true;
+    for (const auto& p : v.object) planar = planar && std::abs(p.z() - z0) < 1e-9;
+    if (planar) {
+      for (auto& p : v.object) p.z() = 0.0;
+    }
+    for (const auto& p : v.image) {
+      if (p.x() < -0.5 || p.y() < -0.5 || p.x() > o.width - 0.5 || p.y() > o.height - 0.5) {
+        std::ostringstream m;
+        m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the " << o.width << "x" << o.height << " image";
+        throw std::runtime_error(m.str());
+      }
+    }
+  }
+  // Non-planar views (3-D rigs): DLT per view gives K, R, t directly; K is their mean.
+  auto is_planar = [](const CalibrationView& v) {
+    for (const auto& p : v.object) {
+      if (p.z() != 0.0) return false;
+    }
+    return true;
+  };
+  std::vector<int> dlt_views;
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (!is_planar(views[i])) dlt_views.push_back(static_cast<int>(i));
+  }
+  if (!dlt_views.empty()) return CalibrateFromDlt(views, dlt_views, o);
+  // Zhang: V b = 0 for B = K^-T K^-1 (zero skew).
+  std::vector<Eigen::Matrix3d> Hs;
+  Eigen::MatrixXd V(2 * views.size() + 1, 6);
+  for (size_t i = 0; i < views.size(); ++i) {
+    Hs.push_back(Homography(views[i]));
+    V.row(static_cast<long>(2 * i)) = Vij(Hs[i], 0, 1).transpose();
+    V.row(static_cast<long>(2 * i + 1)) = (Vij(Hs[i], 0, 0) - Vij(Hs[i], 1, 1)).transpose();
+  }
+  V.row(static_cast<long>(2 * views.size())) << 0, 1, 0, 0, 0, 0;  // zero skew
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(V, Eigen::ComputeFullV);
+  Eigen::Matrix<double, 6, 1> b = svd.matrixV().col(5);
+  if (b[0] < 0) b = -b;
+  const double B11 = b[0], B12 = b[1], B22 = b[2], B13 = b[3], B23 = b[4], B33 = b[5];
+  const double v0 = (B12 * B13 - B11 * B23) / (B11 * B22 - B12 * B12);
+  const double lambda = B33 - (B13 * B13 + v0 * (B12 * B13 - B11 * B23)) / B11;
+  const double alpha = std::sqrt(lambda / B11);
+  const double beta = std::sqrt(lambda * B11 / (B11 * B22 - B12 * B12));
+  const double u0 = -B13 * alpha * alpha / lambda;
+  if (!std::isfinite(alpha) || !std::isfinite(beta) || !std::isfinite(u0) || !std::isfinite(v0)) {
+    throw std::runtime_error("calibration: degenerate views (all boards parallel, or too few orientations); tilt the board differently in each view");
+  }
+  Eigen::Matrix3d K;
+  K << alpha, 0, u0, 0, beta, v0, 0, 0, 1;
+  double intr[9] = {alpha, beta, u0, v0, 0, 0, 0, 0, 0};
+  std::vector<std::array<double, 6>> poses(views.size());
+  for (size_t i = 0; i < views.size(); ++i) {
+    const Eigen::Matrix3d M = K.inverse() * Hs[i];
+    double l = 1.0 / M.col(0).norm();
+    if (M(2, 2) * l < 0) l = -l;
+    Eigen::Matrix3d R;
+    R.col(0) = l * M.col(0);
+    R.col(1) = l * M.col(1);
+    R.col(2) = R.col(0).cross(R.col(1));
+    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    R = s.matrixU() * s.matrixV().transpose();
+    const Eigen::AngleAxisd aa(R);
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    const Eigen::Vector3d t = l * M.col(2);
+    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+  }
+  return Refine(views, o, intr, poses);
 }
 
 }  // namespace kincal::vision

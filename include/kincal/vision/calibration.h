@@ -1,5 +1,6 @@
-// Camera calibration from views of a planar board: Zhang's linear initialisation
-// (homographies -> intrinsics -> per-view extrinsics), then Levenberg-Marquardt with Ceres
+// Camera calibration from views of a planar board (Zhang's linear initialisation:
+// homographies -> intrinsics -> per-view extrinsics) or of a 3-D rig (a DLT per view,
+// decomposed into K, R, t; K averaged), then Levenberg-Marquardt with Ceres
 // over the intrinsics, distortion and every view's pose; 1-sigma from ceres::Covariance
 // scaled by the residual variance. rms_px is OpenCV's: sqrt(sum(du^2 + dv^2) / points).
 #pragma once
@@ -15,7 +16,7 @@ namespace kincal::vision {
 
 struct CalibrationView {
   std::string name;                     // e.g. the image file, for error messages
-  std::vector<Eigen::Vector3d> object;  // board points, m (planar: constant Z)
+  std::vector<Eigen::Vector3d> object;  // board or rig points, m
   std::vector<Eigen::Vector2d> image;   // px
 };
 
@@ -36,7 +37,7 @@ struct CalibrationResult {
 };
 
 // Throws std::runtime_error naming the view and the problem (too few points, a
-// degenerate view, points outside the image, non-planar board).
+// degenerate view, points outside the image).
 CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views,
                                   const CalibrationOptions& options);
 
