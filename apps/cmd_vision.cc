@@ -107,7 +107,7 @@ Command AddRender(CLI::App& app) {
   app.add_option("--noise", a->noise, "image noise, grey levels")->capture_default_str();
   app.add_option("--seed", a->seed, "noise seed")->capture_default_str();
   app.add_option("--board", a->board,
-                 "render a circle board lying on the floor instead: circles|acircles:COLSxROWS:PITCH");
+                 "render a board lying on the floor instead: chessboard|circles|acircles:COLSxROWS:PITCH");
   app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
   app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
   return [a]() -> int {
@@ -132,9 +132,9 @@ Command AddRender(CLI::App& app) {
     ro.noise_sigma = a->noise;
     vision::TargetLayout layout = LoadLayout(a->layout);
     if (!a->board.empty()) {
-      static const std::regex re(R"((circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
+      static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
       std::smatch m;
-      if (!std::regex_match(a->board, m, re)) throw std::runtime_error("--board '" + a->board + "': expected circles|acircles:COLSxROWS:PITCH");
+      if (!std::regex_match(a->board, m, re)) throw std::runtime_error("--board '" + a->board + "': expected chessboard|circles|acircles:COLSxROWS:PITCH");
       const bool asym = m[1] == "acircles";
       const int cols = std::stoi(m[2]), rows = std::stoi(m[3]);
       const double pitch = std::stod(m[4]);
@@ -149,6 +149,14 @@ Command AddRender(CLI::App& app) {
       pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // on the floor (tilted about x)
     }
     if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
+    if (a->board.rfind("chessboard:", 0) == 0) {
+      const std::regex re(R"(chessboard:(\d+)x(\d+):([0-9.eE+-]+))");
+      std::smatch m;
+      std::regex_match(a->board, m, re);
+      const auto fr = vision::RenderChessboard(cam, pose, std::stoi(m[1]), std::stoi(m[2]), std::stod(m[3]), ro, rng);
+      if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
+      return 0;
+    }
     const auto fr = vision::RenderTarget(cam, pose, layout, ro, rng);
     if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
     std::cout << std::fixed << std::setprecision(4);

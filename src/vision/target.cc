@@ -26,6 +26,27 @@ bool TargetLayout::IsValid(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// Blur, vignetting, noise and 8-bit quantisation of a rendered radiance image.
+cv::Mat Finish(const CameraModel& cam, cv::Mat img, const RenderOptions& opt, std::mt19937_64& rng) {
+  if (opt.blur_sigma_px > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), opt.blur_sigma_px);
+  std::normal_distribution<double> g(0.0, opt.noise_sigma);
+  const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
+  cv::Mat out8(cam.height, cam.width, CV_8UC1);
+  for (int v = 0; v < cam.height; ++v) {
+    for (int u = 0; u < cam.width; ++u) {
+      const double rr = ((u - cam.cx) * (u - cam.cx) + (v - cam.cy) * (v - cam.cy)) / rmax2;
+      double val = img.at<double>(v, u) * (1.0 - opt.vignetting * rr);
+      if (opt.noise_sigma > 0.0) val += g(rng);
+      out8.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(std::lround(val));
+    }
+  }
+  return out8;
+}
+
+}  // namespace
+
 RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
                            const RenderOptions& opt, std::mt19937_64& rng) {
   cv::Mat img(cam.height, cam.width, CV_64FC1, cv::Scalar(opt.background));
@@ -73,19 +94,39 @@ RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const Targ
     }
   }
   if (!layout.dark_on_light) img = opt.background + opt.foreground - img;
-  if (opt.blur_sigma_px > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), opt.blur_sigma_px);
-  std::normal_distribution<double> g(0.0, opt.noise_sigma);
-  const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
-  cv::Mat out8(cam.height, cam.width, CV_8UC1);
+  out.image = Finish(cam, img, opt, rng);
+  return out;
+}
+
+RenderedFrame RenderChessboard(const CameraModel& cam, const Pose3& pose, int cols, int rows,
+                               double pitch, const RenderOptions& opt, std::mt19937_64& rng) {
+  cv::Mat img(cam.height, cam.width, CV_64FC1, cv::Scalar(opt.background));
+  RenderedFrame out;
+  for (int r = 0; r < rows; ++r) {
+    for (int c = 0; c < cols; ++c) out.centres.push_back(cam.Project(pose.R * Eigen::Vector3d(c * pitch, r * pitch, 0) + pose.t));
+  }
+  const Eigen::Vector3d n = pose.R.col(2);
+  const double d = n.dot(pose.t);
+  const int s = std::max(1, opt.supersample / 2);
   for (int v = 0; v < cam.height; ++v) {
     for (int u = 0; u < cam.width; ++u) {
-      const double rr = ((u - cam.cx) * (u - cam.cx) + (v - cam.cy) * (v - cam.cy)) / rmax2;
-      double val = img.at<double>(v, u) * (1.0 - opt.vignetting * rr);
-      if (opt.noise_sigma > 0.0) val += g(rng);
-      out8.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(std::lround(val));
+      int dark = 0, hits = 0;
+      for (int sy = 0; sy < s; ++sy) {
+        for (int sx = 0; sx < s; ++sx) {
+          const Eigen::Vector2d nn = cam.PixelToNormalized({u - 0.5 + (sx + 0.5) / s, v - 0.5 + (sy + 0.5) / s});
+          const Eigen::Vector3d ray(nn.x(), nn.y(), 1.0);
+          const Eigen::Vector3d X = pose.R.transpose() * (d / n.dot(ray) * ray - pose.t);
+          // Squares from -1 to cols (rows): a white margin around them.
+          const double qx = X.x() / pitch + 1.0, qy = X.y() / pitch + 1.0;
+          if (qx < 0 || qy < 0 || qx >= cols + 1 || qy >= rows + 1) continue;
+          ++hits;
+          if ((static_cast<int>(qx) + static_cast<int>(qy)) % 2 == 0) ++dark;
+        }
+      }
+      if (hits > 0) img.at<double>(v, u) = opt.background + (opt.foreground - opt.background) * dark / (s * s);
     }
   }
-  out.image = out8;
+  out.image = Finish(cam, img, opt, rng);
   return out;
 }
 

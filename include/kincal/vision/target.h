@@ -51,4 +51,9 @@ struct RenderedFrame {
 RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const TargetLayout& layout,
                            const RenderOptions& opt, std::mt19937_64& rng);
 
+// A chessboard of (cols + 1) x (rows + 1) squares of side `pitch` (m) whose inner corner
+// (0, 0) is the board origin; `centres` returns the projected inner corners, row-major.
+RenderedFrame RenderChessboard(const CameraModel& cam, const Pose3& pose, int cols, int rows,
+                               double pitch, const RenderOptions& opt, std::mt19937_64& rng);
+
 }  // namespace kincal::vision
