@@ -10,39 +10,12 @@
 #include <opencv2/imgproc.hpp>
 #include <regex>
 
+#include "board.h"
 #include "commands.h"
 #include "kincal/vision/calibration.h"
 
 namespace kincal::app {
 namespace {
-
-struct Board {
-  std::string kind;  // chessboard, circles, acircles
-  int cols = 0, rows = 0;
-  double pitch = 0;
-};
-
-Board ParseBoard(const std::string& s) {
-  static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
-  std::smatch m;
-  if (!std::regex_match(s, m, re)) {
-    throw std::runtime_error("--board '" + s + "': expected KIND:COLSxROWS:PITCH with KIND chessboard, circles or acircles, e.g. chessboard:9x6:0.025");
-  }
-  Board b{m[1], std::stoi(m[2]), std::stoi(m[3]), std::stod(m[4])};
-  if (b.cols < 2 || b.rows < 2 || !(b.pitch > 0)) throw std::runtime_error("--board '" + s + "': need >= 2x2 points and pitch > 0");
-  return b;
-}
-
-std::vector<Eigen::Vector3d> BoardPoints(const Board& b) {
-  std::vector<Eigen::Vector3d> pts;
-  for (int r = 0; r < b.rows; ++r) {
-    for (int c = 0; c < b.cols; ++c) {
-      const double x = b.kind == "acircles" ? (2 * c + r % 2) * b.pitch : c * b.pitch;
-      pts.emplace_back(x, r * b.pitch, 0.0);
-    }
-  }
-  return pts;
-}
 
 std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, const Board& b, int* w, int* h) {
   std::vector<std::filesystem::path> files;
@@ -78,7 +51,7 @@ std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, con
     }
     vision::CalibrationView v;
     v.name = f.filename().string();
-    v.object = BoardPoints(b);
+    v.object = b.Points();
     for (const auto& c : corners) v.image.emplace_back(c.x, c.y);
     views.push_back(std::move(v));
   }
@@ -114,7 +87,7 @@ Command AddCamcal(CLI::App& app) {
       views = vision::ReadCalibrationPoints(a->points);
     } else {
       if (a->board.empty()) throw std::runtime_error("--images needs --board KIND:COLSxROWS:PITCH");
-      views = ViewsFromImages(a->images, ParseBoard(a->board), &opt.width, &opt.height);
+      views = ViewsFromImages(a->images, Board::Parse(a->board), &opt.width, &opt.height);
     }
     const auto r = vision::CalibrateCamera(views, opt);
     vision::WriteCameraYaml(r.camera, a->out);

@@ -7,9 +7,9 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <regex>
 #include <yaml-cpp/yaml.h>
 
+#include "board.h"
 #include "commands.h"
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
@@ -132,28 +132,19 @@ Command AddRender(CLI::App& app) {
     ro.noise_sigma = a->noise;
     vision::TargetLayout layout = LoadLayout(a->layout);
     if (!a->board.empty()) {
-      static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
-      std::smatch m;
-      if (!std::regex_match(a->board, m, re)) throw std::runtime_error("--board '" + a->board + "': expected chessboard|circles|acircles:COLSxROWS:PITCH");
-      const bool asym = m[1] == "acircles";
-      const int cols = std::stoi(m[2]), rows = std::stoi(m[3]);
-      const double pitch = std::stod(m[4]);
+      const Board board = Board::Parse(a->board);
       layout.name = a->board;
       layout.markers.clear();
-      for (int r = 0; r < rows; ++r) {
-        for (int c = 0; c < cols; ++c) layout.markers.emplace_back((asym ? 2 * c + r % 2 : c) * pitch, r * pitch);
-      }
-      layout.marker_radius_m = pitch / 4.0;
+      for (const auto& p : board.Points()) layout.markers.emplace_back(p.x(), p.y());
+      layout.marker_radius_m = board.pitch / 4.0;
       pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
                Eigen::AngleAxisd(a->tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
       pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // on the floor (tilted about x)
     }
     if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
-    if (a->board.rfind("chessboard:", 0) == 0) {
-      const std::regex re(R"(chessboard:(\d+)x(\d+):([0-9.eE+-]+))");
-      std::smatch m;
-      std::regex_match(a->board, m, re);
-      const auto fr = vision::RenderChessboard(cam, pose, std::stoi(m[1]), std::stoi(m[2]), std::stod(m[3]), ro, rng);
+    if (!a->board.empty() && Board::Parse(a->board).kind == "chessboard") {
+      const Board board = Board::Parse(a->board);
+      const auto fr = vision::RenderChessboard(cam, pose, board.cols, board.rows, board.pitch, ro, rng);
       if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
       return 0;
     }
@@ -248,12 +239,9 @@ Command AddFloorcal(CLI::App& app) {
   app.add_option("--intrinsics", a->intrinsics, "camera YAML")->required();
   app.add_option("--out", a->out, "YAML with the floor extrinsics and their covariance")->required();
   return [a]() -> int {
-    static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
-    std::smatch m;
-    if (!std::regex_match(a->board, m, re)) throw std::runtime_error("--board '" + a->board + "': expected KIND:COLSxROWS:PITCH");
-    const std::string kind = m[1];
-    const int cols = std::stoi(m[2]), rows = std::stoi(m[3]);
-    const double pitch = std::stod(m[4]);
+    const Board board = Board::Parse(a->board);
+    const std::string& kind = board.kind;
+    const int cols = board.cols, rows = board.rows;
     const auto cam = vision::ReadCameraYaml(a->intrinsics);
     const cv::Mat img = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
     if (img.empty()) throw std::runtime_error(a->image + ": unreadable image");
@@ -267,15 +255,9 @@ Command AddFloorcal(CLI::App& app) {
       found = cv::findCirclesGrid(img, {cols, rows}, pts, kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
     }
     if (!found) throw std::runtime_error(a->image + ": board " + a->board + " not found");
-    std::vector<Eigen::Vector3d> obj;
+    const std::vector<Eigen::Vector3d> obj = board.Points();
     std::vector<Eigen::Vector2d> norm;
-    for (int r = 0; r < rows; ++r) {
-      for (int c = 0; c < cols; ++c) {
-        obj.emplace_back((kind == "acircles" ? (2 * c + r % 2) : c) * pitch, r * pitch, 0.0);
-        const auto& p = pts[static_cast<size_t>(r * cols + c)];
-        norm.push_back(cam.PixelToNormalized({p.x, p.y}));
-      }
-    }
+    for (const auto& p : pts) norm.push_back(cam.PixelToNormalized({p.x, p.y}));
     vision::Pose3 init;
     if (!vision::PlanarInitialPose(obj, norm, &init)) throw std::runtime_error(a->image + ": degenerate board view");
     auto r = vision::LowePose(obj, norm, init, cam.fx, 1.0);

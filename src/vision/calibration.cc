@@ -72,6 +72,23 @@ Eigen::Matrix3d Homography(const CalibrationView& v) {
   return Ti.inverse() * H * To;
 }
 
+// Board pose (angle-axis, translation) from its homography and the intrinsics.
+std::array<double, 6> PoseFromHomography(const Eigen::Matrix3d& K, const Eigen::Matrix3d& H) {
+  const Eigen::Matrix3d M = K.inverse() * H;
+  double l = 1.0 / M.col(0).norm();
+  if (M(2, 2) * l < 0) l = -l;
+  Eigen::Matrix3d R;
+  R.col(0) = l * M.col(0);
+  R.col(1) = l * M.col(1);
+  R.col(2) = R.col(0).cross(R.col(1));
+  Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  R = s.matrixU() * s.matrixV().transpose();
+  const Eigen::AngleAxisd aa(R);
+  const Eigen::Vector3d w = aa.angle() * aa.axis();
+  const Eigen::Vector3d t = l * M.col(2);
+  return {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+}
+
 Eigen::Matrix<double, 6, 1> Vij(const Eigen::Matrix3d& H, int i, int j) {
   const Eigen::Vector3d a = H.col(i), b = H.col(j);
   Eigen::Matrix<double, 6, 1> v;
@@ -262,19 +279,7 @@ CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
   // Planar views among them: extrinsics from their homography and this K.
   for (size_t i = 0; i < views.size(); ++i) {
     if (have[i]) continue;
-    const Eigen::Matrix3d M = K.inverse() * Homography(views[i]);
-    double l = 1.0 / M.col(0).norm();
-    if (M(2, 2) * l < 0) l = -l;
-    Eigen::Matrix3d R;
-    R.col(0) = l * M.col(0);
-    R.col(1) = l * M.col(1);
-    R.col(2) = R.col(0).cross(R.col(1));
-    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    R = s.matrixU() * s.matrixV().transpose();
-    const Eigen::AngleAxisd aa(R);
-    const Eigen::Vector3d w = aa.angle() * aa.axis();
-    const Eigen::Vector3d t = l * M.col(2);
-    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+    poses[i] = PoseFromHomography(K, Homography(views[i]));
   }
   return Refine(views, o, intr, poses);
 }
@@ -343,19 +348,7 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
   double intr[9] = {alpha, beta, u0, v0, 0, 0, 0, 0, 0};
   std::vector<std::array<double, 6>> poses(views.size());
   for (size_t i = 0; i < views.size(); ++i) {
-    const Eigen::Matrix3d M = K.inverse() * Hs[i];
-    double l = 1.0 / M.col(0).norm();
-    if (M(2, 2) * l < 0) l = -l;
-    Eigen::Matrix3d R;
-    R.col(0) = l * M.col(0);
-    R.col(1) = l * M.col(1);
-    R.col(2) = R.col(0).cross(R.col(1));
-    Eigen::JacobiSVD<Eigen::Matrix3d> s(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    R = s.matrixU() * s.matrixV().transpose();
-    const Eigen::AngleAxisd aa(R);
-    const Eigen::Vector3d w = aa.angle() * aa.axis();
-    const Eigen::Vector3d t = l * M.col(2);
-    poses[i] = {w.x(), w.y(), w.z(), t.x(), t.y(), t.z()};
+    poses[i] = PoseFromHomography(K, Hs[i]);
   }
   return Refine(views, o, intr, poses);
 }
