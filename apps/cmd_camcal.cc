@@ -13,6 +13,7 @@
 #include "board.h"
 #include "commands.h"
 #include "kincal/vision/calibration.h"
+#include "kincal/vision/opencv_baseline.h"
 
 namespace kincal::app {
 namespace {
@@ -92,22 +93,12 @@ Command AddCamcal(CLI::App& app) {
     const auto r = vision::CalibrateCamera(views, opt);
     vision::WriteCameraYaml(r.camera, a->out);
     // OpenCV on the same points.
-    std::vector<std::vector<cv::Point3f>> obj;
-    std::vector<std::vector<cv::Point2f>> img;
-    for (const auto& v : views) {
-      obj.emplace_back();
-      img.emplace_back();
-      for (size_t k = 0; k < v.object.size(); ++k) {
-        obj.back().emplace_back(static_cast<float>(v.object[k].x()), static_cast<float>(v.object[k].y()), static_cast<float>(v.object[k].z() - v.object[0].z()));
-        img.back().emplace_back(static_cast<float>(v.image[k].x()), static_cast<float>(v.image[k].y()));
-      }
-    }
-    cv::Mat K, D;
-    std::vector<cv::Mat> rv, tv;
-    const double cv_rms = cv::calibrateCamera(obj, img, cv::Size(opt.width, opt.height), K, D, rv, tv, a->k3 ? 0 : cv::CALIB_FIX_K3);
+    const auto cv_result = vision::CalibrateWithOpenCv(views, opt, r.camera);
+    const double cv_rms = cv_result.rms_px;
+    const auto& c = cv_result.camera;
     const char* names[9] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
     const double ours[9] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2, r.camera.k3};
-    const double theirs[9] = {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2), D.at<double>(0), D.at<double>(1), D.at<double>(2), D.at<double>(3), D.total() > 4 ? D.at<double>(4) : 0.0};
+    const double theirs[9] = {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3};
     const int np = a->k3 ? 9 : 8;
     std::cout << std::setprecision(6) << views.size() << " views, " << r.points << " points\n"
               << std::setw(6) << "" << std::setw(16) << "kincal" << std::setw(14) << "1-sigma" << std::setw(16) << "cv::calibrate" << "\n";
