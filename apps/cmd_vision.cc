@@ -11,47 +11,14 @@
 
 #include "board.h"
 #include "commands.h"
+#include "kincal/vision/config.h"
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
 
 namespace kincal::app {
 namespace {
 
-// Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
-vision::TargetLayout LoadLayout(const std::string& path) {
-  if (path.empty()) return vision::TargetLayout::Thesis();
-  YAML::Node n;
-  try {
-    n = YAML::LoadFile(path);
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": " + e.what());
-  }
-  vision::TargetLayout t;
-  try {
-    t.name = n["name"] ? n["name"].as<std::string>() : path;
-    if (n["marker_radius_m"]) t.marker_radius_m = n["marker_radius_m"].as<double>();
-    if (n["dark_on_light"]) t.dark_on_light = n["dark_on_light"].as<bool>();
-    if (n["plate_size_m"]) {
-      const auto v = n["plate_size_m"].as<std::vector<double>>();
-      if (v.size() != 2) throw std::runtime_error(path + ": plate_size_m needs [width, height]");
-      t.plate_size_m = Eigen::Vector2d(v[0], v[1]);
-    }
-    if (!n["markers"]) throw std::runtime_error(path + ": missing key 'markers'");
-    t.markers.clear();
-    for (const auto& m : n["markers"]) {
-      const auto v = m.as<std::vector<double>>();
-      if (v.size() != 2) {
-        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) + ": a marker is [x, y] in metres");
-      }
-      t.markers.emplace_back(v[0], v[1]);
-    }
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  std::string error;
-  if (!t.IsValid(&error)) throw std::runtime_error(path + ": " + error);
-  return t;
-}
+vision::TargetLayout LoadLayout(const std::string& path) { return vision::ReadTargetLayoutYaml(path); }
 
 }  // namespace
 

@@ -17,5 +17,6 @@ Command AddTarget(CLI::App& app);
 Command AddRender(CLI::App& app);
 Command AddDetect(CLI::App& app);
 Command AddFloorcal(CLI::App& app);
+Command AddExport(CLI::App& app);
 
 }  // namespace kincal::app

@@ -1,0 +1,80 @@
+// kincal export: the calibrated parameters with their sigma (and covariance) as YAML a
+// robot's configuration can include, from a kincald checkpoint or the last
+// kincal.params_t in an LCM log.
+#include <kincal/params_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <sys/stat.h>
+
+#include <fstream>
+#include <iostream>
+
+#include "commands.h"
+#include "kincal/daemon/checkpoint.h"
+
+namespace kincal::app {
+
+Command AddExport(CLI::App& app) {
+  struct Args {
+    std::string checkpoint, log, channel = "KINCAL_PARAMS", out;
+  };
+  auto a = std::make_shared<Args>();
+  auto* ck = app.add_option("--checkpoint", a->checkpoint, "kincald checkpoint (JSON)");
+  auto* log = app.add_option("--log", a->log, "LCM log: its last kincal.params_t on --channel");
+  ck->excludes(log);
+  app.add_option("--channel", a->channel, "params channel in the log")->capture_default_str();
+  app.add_option("--out", a->out, "YAML file (default: standard output)");
+  return [a]() -> int {
+    daemon::Checkpoint c;
+    std::string source;
+    if (!a->checkpoint.empty()) {
+      c = daemon::ReadCheckpoint(a->checkpoint);
+      source = a->checkpoint;
+    } else if (!a->log.empty()) {
+      struct stat st {};
+      if (::stat(a->log.c_str(), &st) != 0) throw std::runtime_error(a->log + ": cannot open");
+      lcm::LogFile file(a->log, "r");
+      if (!file.good()) throw std::runtime_error(a->log + ": not a readable LCM log");
+      kincal::params_t last;
+      bool found = false;
+      int64_t bad = 0;
+      while (const lcm::LogEvent* ev = file.readNextEvent()) {
+        if (ev->channel != a->channel) continue;
+        kincal::params_t m;
+        if (m.decode(ev->data, 0, ev->datalen) < 0 || m.num_params < 0 ||
+            m.covariance.size() != static_cast<size_t>(m.num_params)) {
+          ++bad;
+          continue;
+        }
+        last = std::move(m);
+        found = true;
+      }
+      if (!found) throw std::runtime_error(a->log + ": no kincal.params_t on channel " + a->channel);
+      if (bad > 0) std::cerr << "kincal export: " << bad << " undecodable events on " << a->channel << " skipped\n";
+      c.model = last.model;
+      c.filter = last.estimator;
+      c.utime = last.utime;
+      c.update_count = last.update_count;
+      c.names = last.names;
+      c.units = last.units;
+      c.values = last.values;
+      const int n = last.num_params;
+      c.covariance.resize(n, n);
+      for (int i = 0; i < n; ++i)
+        for (int k = 0; k < n; ++k) c.covariance(i, k) = last.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
+      source = a->log + " (" + a->channel + ")";
+    } else {
+      throw std::runtime_error("give --checkpoint FILE or --log FILE");
+    }
+    if (a->out.empty()) {
+      daemon::WriteExportYaml(std::cout, c, source);
+    } else {
+      std::ofstream out(a->out);
+      if (!out) throw std::runtime_error(a->out + ": cannot write");
+      daemon::WriteExportYaml(out, c, source);
+      std::cout << "wrote " << a->out << "\n";
+    }
+    return 0;
+  };
+}
+
+}  // namespace kincal::app

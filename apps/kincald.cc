@@ -1,0 +1,120 @@
+// kincald: the kincal daemon. Captures frames (V4L2, libcamera, simulated camera or a
+// recorded log), finds the target, calibrates the robot online and publishes over LCM.
+// Thin front end over kincal::daemon::Daemon; see `kincald --help` and docs/daemon.md.
+#include <CLI/CLI.hpp>
+#include <spdlog/spdlog.h>
+
+#include <csignal>
+#include <filesystem>
+#include <iostream>
+#include <thread>
+
+#include "kincal/daemon/daemon.h"
+
+#ifndef KINCAL_INSTALL_DATADIR
+#define KINCAL_INSTALL_DATADIR ""
+#endif
+#ifndef KINCAL_SOURCE_DIR
+#define KINCAL_SOURCE_DIR ""
+#endif
+
+namespace {
+
+// Without --config: the simulated robot (config/kincald_sim.yaml) from the install or
+// the source tree.
+std::string DefaultConfig() {
+  for (const std::string& dir : {std::string(KINCAL_INSTALL_DATADIR) + "/config", std::string(KINCAL_SOURCE_DIR) + "/config"}) {
+    const auto p = std::filesystem::path(dir) / "kincald_sim.yaml";
+    if (std::filesystem::exists(p)) return p.string();
+  }
+  return "";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"kincald: online kinematic calibration daemon (capture -> markers -> pose -> SR-DD2 -> LCM)"};
+  std::string config, device, libcamera, replay, record, lcm_url, resume, checkpoint;
+  double speed = 1.0, duration = 0.0;
+  bool fast = false, record_png = false, publish_frames = false, quiet = false, resume_if_present = false;
+  app.add_option("-c,--config", config, "YAML config (default: the simulated robot, config/kincald_sim.yaml)");
+  auto* dev = app.add_option("--device", device, "V4L2 device, e.g. /dev/video0 (source: v4l2)");
+  auto* lc = app.add_option("--libcamera", libcamera, "libcamera camera id, or 'first' (source: libcamera)");
+  auto* rp = app.add_option("--replay", replay, "replay an LCM log recorded by kincald (source: replay)");
+  dev->excludes(lc)->excludes(rp);
+  lc->excludes(rp);
+  auto* sp = app.add_option("--speed", speed, "replay/simulation speed factor (1: real time)");
+  auto* fa = app.add_flag("--fast", fast, "as fast as possible, nothing dropped, deterministic");
+  sp->excludes(fa);
+  app.add_option("--record", record, "write everything (frames, controls, outputs) to this LCM log");
+  app.add_flag("--record-png", record_png, "store recorded frames as PNG instead of raw");
+  app.add_flag("--publish-frames", publish_frames, "also publish frames on LCM (default: log only)");
+  app.add_option("--lcm-url", lcm_url, "LCM provider URL, e.g. udpm://239.255.76.67:7667?ttl=0 or memq://");
+  app.add_option("--resume", resume, "start from this checkpoint (JSON)");
+  app.add_option("--checkpoint", checkpoint, "write checkpoints (and the final estimate) to this file");
+  app.add_flag("--resume-if-present", resume_if_present, "resume from the --checkpoint file when it exists (services)");
+  app.add_option("--duration", duration, "simulation length in seconds (source: sim)");
+  app.add_flag("-q,--quiet", quiet, "log warnings and errors only");
+  CLI11_PARSE(app, argc, argv);
+  if (quiet) spdlog::set_level(spdlog::level::warn);
+
+  // SIGINT/SIGTERM go to one thread that asks the daemon to stop (drain, final estimate,
+  // checkpoint, close the log). A second signal exits at once.
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGINT);
+  sigaddset(&signals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+
+  try {
+    if (config.empty()) config = DefaultConfig();
+    kincal::daemon::DaemonConfig cfg = config.empty() ? kincal::daemon::DaemonConfig{} : kincal::daemon::LoadDaemonConfig(config);
+    if (!device.empty()) {
+      cfg.source = "v4l2";
+      cfg.v4l2.device = device;
+    } else if (!libcamera.empty()) {
+      cfg.source = "libcamera";
+      cfg.libcamera.camera = libcamera == "first" ? "" : libcamera;
+    } else if (!replay.empty()) {
+      cfg.source = "replay";
+      cfg.replay.path = replay;
+    }
+    if (cfg.source == "replay") cfg.replay.speed = fast ? 0.0 : (sp->count() ? speed : cfg.replay.speed);
+    if (cfg.source == "sim") cfg.sim.speed = fast ? 0.0 : (sp->count() ? speed : cfg.sim.speed);
+    if (duration > 0) cfg.sim.duration_s = duration;
+    if (!record.empty()) cfg.record.path = record;
+    if (record_png) cfg.record.frame_encoding = "png";
+    if (publish_frames) cfg.lcm.publish_frames = true;
+    if (!lcm_url.empty()) cfg.lcm.url = lcm_url;
+    if (!resume.empty()) cfg.checkpoint.resume = resume;
+    if (!checkpoint.empty()) cfg.checkpoint.path = checkpoint;
+    if (resume_if_present && !cfg.checkpoint.path.empty() && std::filesystem::exists(cfg.checkpoint.path)) {
+      cfg.checkpoint.resume = cfg.checkpoint.path;
+    }
+
+    kincal::daemon::Daemon daemon(std::move(cfg));
+    std::thread signal_thread([&daemon, signals] {
+      int sig = 0;
+      if (sigwait(&signals, &sig) != 0) return;
+      if (sig == 0) return;
+      spdlog::info("kincald: {} received", sig == SIGINT ? "SIGINT" : "SIGTERM");
+      daemon.Stop();
+      if (sigwait(&signals, &sig) == 0 && sig != 0) std::_Exit(128 + sig);
+    });
+    signal_thread.detach();
+    const int rc = daemon.Run();
+    const auto est = daemon.Estimate();
+    if (!est.names.empty()) {
+      std::cout << "final estimate (" << est.update_count << " updates, " << est.filter << "):\n";
+      for (size_t i = 0; i < est.names.size(); ++i) {
+        std::cout << "  " << est.names[i] << " = " << est.values[i] << " +- "
+                  << std::sqrt(std::max(0.0, est.covariance(static_cast<int>(i), static_cast<int>(i)))) << " "
+                  << est.units[i] << "\n";
+      }
+    }
+    return rc;
+  } catch (const std::exception& e) {
+    std::cerr << "kincald: error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,138 @@
+// kincald configuration: one struct per YAML section, mapped one to one (config/kincald_*.yaml
+// are the documented examples). LoadDaemonConfig rejects unknown keys and wrong types
+// naming the file and line; Validate() checks values and cross-section consistency.
+// Relative paths in a config file are relative to that file's directory.
+#pragma once
+
+#include <array>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "kincal/vision/markers.h"
+
+namespace kincal::daemon {
+
+struct LcmOptions {
+  std::string url;  // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0)
+  std::string controls_channel = "KINCAL_CONTROLS";
+  std::string pose_channel = "KINCAL_POSE";
+  std::string params_channel = "KINCAL_PARAMS";
+  std::string health_channel = "KINCAL_HEALTH";
+  std::string model_check_channel = "KINCAL_MODEL_CHECK";
+  std::string markers_channel = "KINCAL_MARKERS";
+  std::string frame_channel = "KINCAL_FRAME";
+  bool publish_frames = false;   // frames go to the log; on the network only if asked
+  bool publish_markers = true;
+};
+
+struct V4l2Options {
+  std::string device = "/dev/video0";
+  int width = 640, height = 480;
+  std::string pixel_format = "GREY";  // GREY, YUYV, MJPG
+  double fps = 30.0;
+  int buffers = 4;
+  std::map<std::string, long long> controls;  // V4L2 control name (lower case, '_' for ' ') -> value
+};
+
+struct LibcameraOptions {
+  std::string camera;                // id; empty: the first camera
+  int width = 640, height = 480;
+  std::string pixel_format = "GREY";  // GREY (R8), YUYV, MJPG, BGR3 (RGB888), RGB3 (BGR888)
+  int buffers = 4;
+};
+
+struct SimOptions {
+  std::string scenario = "sim_diffdrive.yaml";  // robot, truth, controls (as `kincal simulate`)
+  double speed = 1.0;        // simulated seconds per wall-clock second; <= 0: as fast as possible
+  double duration_s = 0.0;   // 0: the scenario's
+  double margin_px = 40.0;   // a run ends when the target comes this close to the image edge
+  double carry_s = 1.0;      // the robot is carried back to the centre (no target in view)
+  double noise_grey = 2.0;   // image noise, grey levels
+};
+
+struct ReplayOptions {
+  std::string path;
+  double speed = 1.0;  // 0: --fast (as fast as possible, nothing dropped, deterministic)
+};
+
+struct CameraOptions {
+  std::string intrinsics;      // OpenCV camera YAML; empty: 640x480, f = 500 px (simulation)
+  std::string floor;           // floor extrinsics from `kincal floorcal`; empty: nadir camera
+  double nadir_height_m = 2.0;  // used when `floor` is empty
+};
+
+struct TargetOptions {
+  std::string layout;       // target YAML; empty: the thesis plate
+  double height_m = 0.05;   // target plane above the floor
+};
+
+struct PoseOptions {
+  std::string method = "ground_plane";  // ground_plane (x, y, theta) | lowe (6-DoF, then onto the floor)
+  double sigma_px = 0.05;     // marker centre noise, px
+  double max_rms_px = 2.0;    // poses fitting worse are published invalid
+};
+
+struct RobotOptions {
+  std::string model = "diffdrive";
+  std::vector<std::string> effects;
+  std::map<std::string, double> guess;  // initial parameter values (default: model defaults)
+  double guess_sigma_fraction = 0.2;
+  std::string control_stamp = "receive";  // receive | sender
+  double max_control_delay_s = 0.1;  // a pose waits this long for the controls up to its time
+};
+
+struct FilterOptions {
+  std::string type = "dd2";  // dd2 | ekf | ukf
+  std::vector<double> control_psd;  // per control channel; empty: zeros
+  std::array<double, 3> pose_psd{0.0, 0.0, 0.0};
+  double max_pose_gap_s = 1.0;   // a longer gap starts a new run (pose reset)
+  double params_rate_hz = 10.0;  // params_t publish rate (0: every update)
+  double control_history_s = 10.0;  // control samples kept behind the filter
+};
+
+struct QueueOptions {
+  int frames = 4;       // capture -> detection (live: drop oldest; --fast: block)
+  int poses = 64;       // detection -> filter (live: drop oldest; --fast: block)
+  int controls = 1024;  // LCM -> filter (live: drop oldest; --fast: block)
+  int recorder = 4096;  // everything -> log writer (live: drop newest, counted as lost)
+};
+
+struct RecordOptions {
+  std::string path;                 // empty: no recording
+  std::string frame_encoding = "raw";  // raw | png
+  double flush_every_s = 1.0;
+};
+
+struct CheckpointOptions {
+  std::string path;      // empty: none
+  double every_s = 10.0;
+  std::string resume;    // checkpoint to start from (--resume)
+};
+
+struct DaemonConfig {
+  std::string file;        // where it was read from ("" for defaults)
+  std::string source = "sim";  // sim | v4l2 | libcamera | replay
+  LcmOptions lcm;
+  V4l2Options v4l2;
+  LibcameraOptions libcamera;
+  SimOptions sim;
+  ReplayOptions replay;
+  CameraOptions camera;
+  TargetOptions target;
+  vision::DetectorOptions detector;
+  PoseOptions pose;
+  RobotOptions robot;
+  FilterOptions filter;
+  QueueOptions queues;
+  RecordOptions record;
+  CheckpointOptions checkpoint;
+  double health_rate_hz = 1.0;
+};
+
+// Throws std::runtime_error naming file:line and the offending key.
+DaemonConfig LoadDaemonConfig(const std::string& path);
+// Throws std::runtime_error naming the section.key and what is expected.
+void Validate(const DaemonConfig& c);
+
+}  // namespace kincal::daemon

@@ -1,0 +1,50 @@
+// The frame sources kincald can run from, and the vision set-up they share.
+#pragma once
+
+#include <functional>
+#include <memory>
+
+#include "kincal/daemon/config.h"
+#include "kincal/daemon/frame.h"
+#include "kincal/vision/camera.h"
+#include "kincal/vision/pose.h"
+#include "kincal/vision/target.h"
+
+namespace kincal::daemon {
+
+// Camera intrinsics, floor extrinsics and target layout from a config (defaults: a
+// 640x480 f = 500 px camera looking straight down). Throws naming the file at fault.
+struct VisionSetup {
+  vision::CameraModel camera;
+  vision::FloorExtrinsics floor;
+  vision::TargetLayout layout;
+};
+VisionSetup LoadVisionSetup(const DaemonConfig& c);
+
+// Sources that also carry the robot's controls (simulation, replay) hand each message
+// over as the raw kincal.controls_t bytes with the host time it was received.
+using ControlIntake = std::function<void(const void* data, size_t n, int64_t receive_utime)>;
+// Publishes raw bytes on the network only (the simulated robot's controls).
+using NetworkPublish = std::function<void(const std::string& channel, const void* data, size_t n)>;
+
+// The simulated camera: renders the scenario's robot (true parameters, hidden effects)
+// carrying the target, and publishes the robot's commands like a robot would. A run
+// ends when the target nears the image edge; the robot is then carried back to the
+// centre (no target in view for sim.carry_s) and starts a new run.
+std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v,
+                                           ControlIntake controls, NetworkPublish publish);
+// An LCM log written by `kincald --record`: frames on lcm.frame_channel, controls on
+// lcm.controls_channel (other channels are skipped and counted).
+std::unique_ptr<FrameSource> MakeReplaySource(const DaemonConfig& c, ControlIntake controls);
+// Video4Linux2 capture device, mmap streaming.
+std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o);
+// libcamera camera.
+std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
+
+// Host realtime clock in microseconds, and CLOCK_MONOTONIC in nanoseconds.
+int64_t RealtimeUtime();
+TimeNs MonotonicNs();
+// CLOCK_MONOTONIC ns -> host realtime us, through an offset measured once per process.
+int64_t MonotonicToUtime(TimeNs mono_ns);
+
+}  // namespace kincal::daemon

@@ -1,0 +1,117 @@
+// Checkpoint files (JSON) and the YAML export.
+#include "kincal/daemon/checkpoint.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <stdexcept>
+
+namespace kincal::daemon {
+
+void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
+  nlohmann::json j;
+  j["format"] = "kincal-checkpoint";
+  j["version"] = 1;
+  j["model"] = c.model;
+  j["effects"] = c.effects;
+  j["filter"] = c.filter;
+  j["utime"] = c.utime;
+  j["update_count"] = c.update_count;
+  j["names"] = c.names;
+  j["units"] = c.units;
+  j["values"] = c.values;
+  std::vector<std::vector<double>> cov(static_cast<size_t>(c.covariance.rows()));
+  for (int i = 0; i < c.covariance.rows(); ++i) {
+    for (int k = 0; k < c.covariance.cols(); ++k) cov[static_cast<size_t>(i)].push_back(c.covariance(i, k));
+  }
+  j["covariance"] = cov;
+  const std::string text = j.dump(1);
+  const std::string tmp = path + ".tmp";
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error(tmp + ": cannot write checkpoint: " + std::strerror(errno));
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error(tmp + ": cannot write checkpoint: " + std::strerror(err));
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0 || ::close(fd) != 0) throw std::runtime_error(tmp + ": cannot sync checkpoint");
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    throw std::runtime_error(path + ": cannot replace checkpoint: " + std::strerror(errno));
+  }
+}
+
+Checkpoint ReadCheckpoint(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw std::runtime_error(path + ": cannot open checkpoint");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": not a JSON checkpoint: " + e.what());
+  }
+  Checkpoint c;
+  try {
+    if (j.at("format") != "kincal-checkpoint") throw std::runtime_error("format is not kincal-checkpoint");
+    if (j.at("version") != 1) throw std::runtime_error("unsupported version " + j.at("version").dump());
+    c.model = j.at("model").get<std::string>();
+    c.effects = j.at("effects").get<std::vector<std::string>>();
+    c.filter = j.at("filter").get<std::string>();
+    c.utime = j.at("utime").get<int64_t>();
+    c.update_count = j.at("update_count").get<int64_t>();
+    c.names = j.at("names").get<std::vector<std::string>>();
+    c.units = j.at("units").get<std::vector<std::string>>();
+    c.values = j.at("values").get<std::vector<double>>();
+    const auto cov = j.at("covariance").get<std::vector<std::vector<double>>>();
+    const size_t n = c.names.size();
+    if (c.units.size() != n || c.values.size() != n || cov.size() != n) {
+      throw std::runtime_error("names, units, values and covariance differ in length");
+    }
+    c.covariance.resize(static_cast<int>(n), static_cast<int>(n));
+    for (size_t i = 0; i < n; ++i) {
+      if (cov[i].size() != n) throw std::runtime_error("covariance row " + std::to_string(i) + " has the wrong length");
+      for (size_t k = 0; k < n; ++k) c.covariance(static_cast<int>(i), static_cast<int>(k)) = cov[i][k];
+      if (!std::isfinite(c.values[i])) throw std::runtime_error("value of '" + c.names[i] + "' is not finite");
+    }
+    if (!c.covariance.allFinite()) throw std::runtime_error("covariance is not finite");
+  } catch (const nlohmann::json::exception& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  return c;
+}
+
+void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source) {
+  out << "# kincal calibration of a " << c.model << " robot, from " << source << "\n"
+      << "# " << c.update_count << " pose updates, filter " << c.filter << "; sigma is 1-sigma.\n"
+      << "model: " << c.model << "\n"
+      << "effects: [";
+  for (size_t i = 0; i < c.effects.size(); ++i) out << (i ? ", " : "") << c.effects[i];
+  out << "]\nupdated_utime: " << c.utime << "\nparameters:\n" << std::setprecision(9);
+  for (size_t i = 0; i < c.names.size(); ++i) {
+    const double s = std::sqrt(std::max(0.0, c.covariance(static_cast<int>(i), static_cast<int>(i))));
+    out << "  " << c.names[i] << ": {value: " << c.values[i] << ", sigma: " << std::setprecision(3) << s
+        << std::setprecision(9) << ", unit: \"" << c.units[i] << "\"}\n";
+  }
+  out << "covariance:   # row-major, in the order of 'parameters'\n";
+  for (int i = 0; i < c.covariance.rows(); ++i) {
+    out << "  - [";
+    for (int k = 0; k < c.covariance.cols(); ++k) out << (k ? ", " : "") << std::setprecision(6) << c.covariance(i, k);
+    out << "]\n";
+  }
+}
+
+}  // namespace kincal::daemon

@@ -1,0 +1,106 @@
+// Pixel formats and decoding to grey.
+#include "kincal/daemon/frame.h"
+
+#include <cstring>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace kincal::daemon {
+
+std::string_view PixelFormatName(PixelFormat f) {
+  switch (f) {
+    case PixelFormat::kGrey: return "GREY";
+    case PixelFormat::kYuyv: return "YUYV";
+    case PixelFormat::kMjpeg: return "MJPG";
+    case PixelFormat::kPng: return "PNG";
+    case PixelFormat::kBgr24: return "BGR3";
+    case PixelFormat::kRgb24: return "RGB3";
+  }
+  return "?";
+}
+
+PixelFormat ParsePixelFormat(std::string_view name) {
+  if (name == "GREY") return PixelFormat::kGrey;
+  if (name == "YUYV") return PixelFormat::kYuyv;
+  if (name == "MJPG") return PixelFormat::kMjpeg;
+  if (name == "PNG") return PixelFormat::kPng;
+  if (name == "BGR3") return PixelFormat::kBgr24;
+  if (name == "RGB3") return PixelFormat::kRgb24;
+  throw std::invalid_argument("pixel format '" + std::string(name) + "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
+}
+
+void ToGrey(const Frame& f, cv::Mat* grey) {
+  const auto size_error = [&](size_t need) {
+    return FrameError(std::string(PixelFormatName(f.format)) + " frame " + std::to_string(f.width) + "x" +
+                      std::to_string(f.height) + " stride " + std::to_string(f.stride) + ": needs " +
+                      std::to_string(need) + " bytes, has " + std::to_string(f.data.size()));
+  };
+  if (f.width <= 0 || f.height <= 0 || f.width > 16384 || f.height > 16384) {
+    throw FrameError("frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) + " is out of range");
+  }
+  switch (f.format) {
+    case PixelFormat::kGrey: {
+      if (f.stride < f.width) throw size_error(static_cast<size_t>(f.width) * f.height);
+      const size_t need = static_cast<size_t>(f.stride) * (f.height - 1) + f.width;
+      if (f.data.size() < need) throw size_error(need);
+      grey->create(f.height, f.width, CV_8UC1);
+      for (int r = 0; r < f.height; ++r) {
+        std::memcpy(grey->ptr(r), f.data.data() + static_cast<size_t>(r) * f.stride, static_cast<size_t>(f.width));
+      }
+      return;
+    }
+    case PixelFormat::kYuyv: {
+      if (f.width % 2 != 0 || f.stride < 2 * f.width) throw FrameError("YUYV frame: odd width or stride < 2*width");
+      const size_t need = static_cast<size_t>(f.stride) * (f.height - 1) + 2 * static_cast<size_t>(f.width);
+      if (f.data.size() < need) throw size_error(need);
+      grey->create(f.height, f.width, CV_8UC1);
+      for (int r = 0; r < f.height; ++r) {
+        const uint8_t* src = f.data.data() + static_cast<size_t>(r) * f.stride;
+        uint8_t* dst = grey->ptr(r);
+        for (int x = 0; x < f.width; ++x) dst[x] = src[2 * x];  // Y of Y0 U Y1 V
+      }
+      return;
+    }
+    case PixelFormat::kBgr24:
+    case PixelFormat::kRgb24: {
+      if (f.stride < 3 * f.width) throw FrameError("24-bit frame: stride < 3*width");
+      const size_t need = static_cast<size_t>(f.stride) * (f.height - 1) + 3 * static_cast<size_t>(f.width);
+      if (f.data.size() < need) throw size_error(need);
+      const cv::Mat colour(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.data.data()), static_cast<size_t>(f.stride));
+      cv::cvtColor(colour, *grey, f.format == PixelFormat::kBgr24 ? cv::COLOR_BGR2GRAY : cv::COLOR_RGB2GRAY);
+      return;
+    }
+    case PixelFormat::kMjpeg:
+    case PixelFormat::kPng: {
+      if (f.data.empty()) throw FrameError(std::string(PixelFormatName(f.format)) + " frame is empty");
+      const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1, const_cast<uint8_t*>(f.data.data()));
+      cv::Mat decoded;
+      try {
+        decoded = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
+      } catch (const cv::Exception& e) {
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame: decoder error: " + e.what());
+      }
+      if (decoded.empty()) throw FrameError(std::string(PixelFormatName(f.format)) + " frame: corrupt data (" +
+                                            std::to_string(f.data.size()) + " bytes)");
+      if (decoded.cols != f.width || decoded.rows != f.height) {
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame decodes to " + std::to_string(decoded.cols) +
+                         "x" + std::to_string(decoded.rows) + ", expected " + std::to_string(f.width) + "x" +
+                         std::to_string(f.height));
+      }
+      decoded.copyTo(*grey);
+      return;
+    }
+  }
+}
+
+void FromGrey(const cv::Mat& grey, Frame* f) {
+  CV_Assert(grey.type() == CV_8UC1);
+  f->width = grey.cols;
+  f->height = grey.rows;
+  f->stride = grey.cols;
+  f->format = PixelFormat::kGrey;
+  f->data.resize(static_cast<size_t>(grey.cols) * grey.rows);
+  for (int r = 0; r < grey.rows; ++r) std::memcpy(f->data.data() + static_cast<size_t>(r) * grey.cols, grey.ptr(r), grey.cols);
+}
+
+}  // namespace kincal::daemon

@@ -1,0 +1,174 @@
+// The simulated camera: a scenario's robot rendered through the synthetic camera.
+#include <kincal/controls_t.hpp>
+
+#include <chrono>
+#include <numbers>
+#include <random>
+#include <thread>
+
+#include "kincal/angles.h"
+#include "kincal/daemon/sources.h"
+#include "kincal/scenario.h"
+#include "kincal/simulator.h"
+#include "kincal/vision/target.h"
+
+namespace kincal::daemon {
+namespace {
+
+class SimSource final : public FrameSource {
+ public:
+  SimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls, NetworkPublish publish)
+      : cfg_(c),
+        vis_(v),
+        sc_(LoadScenario(c.sim.scenario)),
+        truth_(MakeSystem(sc_.model, sc_.hidden_effects)),
+        intake_(std::move(controls)),
+        publish_(std::move(publish)),
+        rng_(sc_.seed) {
+    if (sc_.model != c.robot.model) {
+      throw SourceError(c.sim.scenario + ": scenario model '" + sc_.model + "' differs from robot.model '" +
+                        c.robot.model + "' in " + (c.file.empty() ? "the config" : c.file));
+    }
+    const int nc = truth_.num_controls();
+    if (static_cast<int>(sc_.control_low.size()) != nc || static_cast<int>(sc_.control_high.size()) != nc) {
+      throw SourceError(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) + " values");
+    }
+    p_true_ = ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth");
+    const double duration = c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s;
+    const TimeNs t1 = SecondsToNs(duration);
+    cmd_ = ControlSignal(nc, 0);
+    if (sc_.profile == "smooth") {
+      AppendSmoothRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s, sc_.control_rate_hz, rng_);
+    } else if (sc_.profile == "piecewise") {
+      AppendPiecewiseRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s, 3.0 * sc_.min_period_s,
+                            rng_);
+    } else {
+      throw SourceError(c.sim.scenario + ": controls.profile must be smooth or piecewise");
+    }
+    times_ = FrameTimes(0, t1, sc_.camera, rng_);
+    x_ = truth_.MakeState(0.0, 0.0, Heading(), p_true_, cmd_, 0.0);
+    render_.noise_sigma = c.sim.noise_grey;
+    render_.background = vis_.layout.dark_on_light ? 200.0 : 40.0;
+    render_.foreground = vis_.layout.dark_on_light ? 40.0 : 200.0;
+    msg_.schema_version = 1;
+    msg_.model = sc_.model;
+    msg_.num_controls = nc;
+    for (const auto& ch : truth_.model().controls()) msg_.names.push_back(ch.name);
+    msg_.values.assign(static_cast<size_t>(nc), 0.0);
+  }
+
+  std::string name() const override { return "sim(" + cfg_.sim.scenario + ")"; }
+  void Start() override {
+    start_utime_ = RealtimeUtime();
+    start_mono_ = MonotonicNs();
+  }
+  void Stop() override { stopped_ = true; }
+  bool lossless() const override { return cfg_.sim.speed <= 0; }
+
+  SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* /*error*/) override {
+    if (stopped_ || k_ >= times_.size()) return SourceStatus::kEnd;
+    const TimeNs t = times_[k_];
+    // The robot's commands up to this frame, as it would publish them.
+    while (ci_ < cmd_.size() && cmd_.ToNs(cmd_.TimeAt(static_cast<int>(ci_))) <= t) EmitControl(ci_++);
+    if (cfg_.sim.speed > 0) {  // pace to simulated time / speed
+      const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(t) / cfg_.sim.speed);
+      while (!stopped_ && MonotonicNs() < due) {
+        std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
+      }
+    }
+    const double ts = cmd_.ToSeconds(t);
+    truth_.Propagate(x_.data(), x_.data(), t_prev_, ts, cmd_, static_cast<const double*>(nullptr));
+    t_prev_ = ts;
+    bool in_view = false;
+    if (carrying_ && t >= carry_until_) {  // put down at the centre, new heading
+      x_[0] = 0.0;
+      x_[1] = 0.0;
+      x_[2] = Heading();
+      carrying_ = false;
+    }
+    vision::Pose3 pose;
+    if (!carrying_) {
+      Eigen::Vector3d target;
+      truth_.Measure(x_.data(), target.data());
+      const Eigen::Matrix3d Rz = Eigen::AngleAxisd(target.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      pose.R = vis_.floor.R_cf * Rz;
+      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), cfg_.target.height_m) + vis_.floor.t_cf;
+      in_view = InView(pose);
+      if (!in_view) {
+        carrying_ = true;
+        carry_until_ = t + SecondsToNs(cfg_.sim.carry_s);
+      }
+    }
+    cv::Mat image;
+    if (in_view) {
+      image = vision::RenderTarget(vis_.camera, pose, vis_.layout, render_, rng_).image;
+    } else {
+      image.create(vis_.camera.height, vis_.camera.width, CV_8UC1);
+      cv::randn(image, render_.background, render_.noise_sigma);
+    }
+    FromGrey(image, f);
+    f->utime = start_utime_ + t / 1000;
+    f->device_utime = f->utime;
+    f->sequence = static_cast<int64_t>(k_);
+    f->arrival_mono_ns = MonotonicNs();
+    ++k_;
+    return SourceStatus::kFrame;
+  }
+
+ private:
+  double Heading() { return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_); }
+
+  bool InView(const vision::Pose3& pose) const {
+    const double m = cfg_.sim.margin_px;
+    for (const auto& q : vis_.layout.markers) {
+      const Eigen::Vector3d pc = pose.R * Eigen::Vector3d(q.x(), q.y(), 0.0) + pose.t;
+      if (pc.z() <= 0) return false;
+      const Eigen::Vector2d px = vis_.camera.Project(pc);
+      if (px.x() < m || px.y() < m || px.x() > vis_.camera.width - 1 - m || px.y() > vis_.camera.height - 1 - m) return false;
+    }
+    return true;
+  }
+
+  void EmitControl(size_t i) {
+    const auto& v = cmd_.ValuesAt(static_cast<int>(i));
+    for (int k = 0; k < msg_.num_controls; ++k) msg_.values[static_cast<size_t>(k)] = v[static_cast<size_t>(k)];
+    msg_.utime = start_utime_ + cmd_.ToNs(cmd_.TimeAt(static_cast<int>(i))) / 1000;
+    msg_.sender_utime = msg_.utime;
+    const int n = msg_.getEncodedSize();
+    buf_.resize(static_cast<size_t>(n));
+    msg_.encode(buf_.data(), 0, n);
+    publish_(cfg_.lcm.controls_channel, buf_.data(), buf_.size());
+    intake_(buf_.data(), buf_.size(), msg_.utime);
+  }
+
+  const DaemonConfig& cfg_;
+  const VisionSetup& vis_;
+  Scenario sc_;
+  System truth_;
+  ControlIntake intake_;
+  NetworkPublish publish_;
+  std::mt19937_64 rng_;
+  VecN<kMaxState> p_true_;
+  ControlSignal cmd_;
+  std::vector<TimeNs> times_;
+  StateVec x_;
+  vision::RenderOptions render_;
+  kincal::controls_t msg_;
+  std::vector<uint8_t> buf_;
+  size_t k_ = 0, ci_ = 0;
+  double t_prev_ = 0.0;
+  bool carrying_ = false;
+  TimeNs carry_until_ = 0;
+  int64_t start_utime_ = 0;
+  TimeNs start_mono_ = 0;
+  std::atomic<bool> stopped_{false};
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls,
+                                           NetworkPublish publish) {
+  return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish));
+}
+
+}  // namespace kincal::daemon

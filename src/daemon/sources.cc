@@ -1,0 +1,63 @@
+// Shared pieces of the frame sources: clocks and the vision set-up.
+#include <time.h>
+
+#include <stdexcept>
+
+#include "kincal/daemon/sources.h"
+#include "kincal/vision/config.h"
+
+namespace kincal::daemon {
+
+int64_t RealtimeUtime() {
+  timespec ts{};
+  clock_gettime(CLOCK_REALTIME, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1'000'000 + ts.tv_nsec / 1000;
+}
+
+TimeNs MonotonicNs() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<TimeNs>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
+}
+
+int64_t MonotonicToUtime(TimeNs mono_ns) {
+  // Offset realtime - monotonic, measured once (the tightest of a few readings). Later
+  // steps of the realtime clock (NTP) do not move the pipeline's time base.
+  static const int64_t offset_ns = [] {
+    int64_t best = 0, best_span = INT64_MAX;
+    for (int i = 0; i < 5; ++i) {
+      const TimeNs a = MonotonicNs();
+      timespec rt{};
+      clock_gettime(CLOCK_REALTIME, &rt);
+      const TimeNs b = MonotonicNs();
+      const int64_t rt_ns = static_cast<int64_t>(rt.tv_sec) * kNsPerSecond + rt.tv_nsec;
+      if (b - a < best_span) {
+        best_span = b - a;
+        best = rt_ns - (a + (b - a) / 2);
+      }
+    }
+    return best;
+  }();
+  return (mono_ns + offset_ns) / 1000;
+}
+
+VisionSetup LoadVisionSetup(const DaemonConfig& c) {
+  VisionSetup v;
+  if (c.camera.intrinsics.empty()) {
+    v.camera.width = 640;
+    v.camera.height = 480;
+    v.camera.fx = v.camera.fy = 500.0;
+    v.camera.cx = 319.5;
+    v.camera.cy = 239.5;
+  } else {
+    v.camera = vision::ReadCameraYaml(c.camera.intrinsics);
+  }
+  v.floor = c.camera.floor.empty() ? vision::NadirFloor(c.camera.nadir_height_m) : vision::ReadFloorYaml(c.camera.floor);
+  v.layout = vision::ReadTargetLayoutYaml(c.target.layout);
+  if (static_cast<int>(v.layout.markers.size()) > kMaxMarkers) {
+    throw std::runtime_error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) + " markers per target");
+  }
+  return v;
+}
+
+}  // namespace kincal::daemon

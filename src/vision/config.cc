@@ -1,0 +1,82 @@
+// Target layout and floor extrinsics files.
+#include "kincal/vision/config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <opencv2/core.hpp>
+#include <stdexcept>
+
+namespace kincal::vision {
+
+// Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
+TargetLayout ReadTargetLayoutYaml(const std::string& path) {
+  if (path.empty()) return TargetLayout::Thesis();
+  YAML::Node n;
+  try {
+    n = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": " + e.what());
+  }
+  TargetLayout t;
+  try {
+    t.name = n["name"] ? n["name"].as<std::string>() : path;
+    if (n["marker_radius_m"]) t.marker_radius_m = n["marker_radius_m"].as<double>();
+    if (n["dark_on_light"]) t.dark_on_light = n["dark_on_light"].as<bool>();
+    if (n["plate_size_m"]) {
+      const auto v = n["plate_size_m"].as<std::vector<double>>();
+      if (v.size() != 2) throw std::runtime_error(path + ": plate_size_m needs [width, height]");
+      t.plate_size_m = Eigen::Vector2d(v[0], v[1]);
+    }
+    if (!n["markers"]) throw std::runtime_error(path + ": missing key 'markers'");
+    t.markers.clear();
+    for (const auto& m : n["markers"]) {
+      const auto v = m.as<std::vector<double>>();
+      if (v.size() != 2) {
+        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) + ": a marker is [x, y] in metres");
+      }
+      t.markers.emplace_back(v[0], v[1]);
+    }
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  std::string error;
+  if (!t.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  return t;
+}
+
+
+FloorExtrinsics ReadFloorYaml(const std::string& path) {
+  cv::FileStorage fs;
+  try {
+    fs.open(path, cv::FileStorage::READ);
+  } catch (const cv::Exception& e) {
+    throw std::runtime_error(path + ": not a readable OpenCV FileStorage file (" + e.what() + ")");
+  }
+  if (!fs.isOpened()) throw std::runtime_error(path + ": cannot open floor extrinsics");
+  cv::Mat R, t;
+  fs["R_cf"] >> R;
+  fs["t_cf"] >> t;
+  if (R.rows != 3 || R.cols != 3 || R.type() != CV_64F) {
+    throw std::runtime_error(path + ": expected a 3x3 double matrix 'R_cf' (from kincal floorcal)");
+  }
+  if (t.total() != 3 || t.type() != CV_64F) throw std::runtime_error(path + ": expected a 3-vector 't_cf'");
+  FloorExtrinsics f;
+  for (int i = 0; i < 3; ++i) {
+    f.t_cf[i] = t.at<double>(i);
+    for (int j = 0; j < 3; ++j) f.R_cf(i, j) = R.at<double>(i, j);
+  }
+  if (!f.R_cf.allFinite() || !f.t_cf.allFinite() ||
+      (f.R_cf.transpose() * f.R_cf - Eigen::Matrix3d::Identity()).norm() > 1e-6 || f.R_cf.determinant() < 0) {
+    throw std::runtime_error(path + ": R_cf is not a rotation");
+  }
+  return f;
+}
+
+FloorExtrinsics NadirFloor(double height_m) {
+  FloorExtrinsics f;
+  f.R_cf = Eigen::Vector3d(1, -1, -1).asDiagonal();
+  f.t_cf = Eigen::Vector3d(0, 0, height_m);
+  return f;
+}
+
+}  // namespace kincal::vision
