@@ -20,6 +20,7 @@
 #include "kincal/analysis/model_check.h"
 #include "kincal/angles.h"
 #include "kincal/daemon/bounded_queue.h"
+#include "kincal/daemon/pose_stage.h"
 #include "kincal/daemon/recorder.h"
 #include "kincal/daemon/sources.h"
 #include "kincal/estimation/online_calibrator.h"
@@ -83,12 +84,6 @@ class PoseRing {
   std::vector<PoseSample> items_;
   size_t head_ = 0, size_ = 0;
 };
-
-Eigen::Vector3d FloorPoseOf(const vision::FloorExtrinsics& floor, const vision::Pose3& p) {
-  const Eigen::Matrix3d Rft = floor.R_cf.transpose() * p.R;
-  const Eigen::Vector3d o = floor.R_cf.transpose() * (p.t - floor.t_cf);
-  return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
-}
 
 }  // namespace
 
@@ -236,52 +231,23 @@ struct Daemon::Impl {
 
   // ---- detection / pose thread --------------------------------------------------------
   void DetectionLoop() {
-    vision::MarkerTracker tracker(vis.camera, vis.layout, cfg.detector);
+    PoseStage stage(cfg, vis);
     Frame f;
-    cv::Mat grey;
     PoseSample p;
     kincal::pose_t pose_msg{};
     kincal::markers_t markers_msg{};
-    const int nm = static_cast<int>(vis.layout.markers.size());
-    std::array<Eigen::Vector3d, kMaxMarkers> obj;
-    std::array<Eigen::Vector2d, kMaxMarkers> norm;
-    Eigen::Vector3d last_pose = Eigen::Vector3d::Zero();
-    bool have_last = false;
+    std::string error;
     while (true) {
       if (!frame_q.Pop(f, std::chrono::milliseconds(100))) {
         if (frame_q.closed_and_empty()) break;
         continue;
       }
-      p = PoseSample{};
-      p.utime = f.utime;
-      p.device_utime = f.device_utime;
-      p.sequence = f.sequence;
-      p.arrival_mono_ns = f.arrival_mono_ns;
-      try {
-        ToGrey(f, &grey);
-      } catch (const FrameError& e) {
+      if (!stage.Process(f, &p, &error)) {
         frame_errors.fetch_add(1);
         std::lock_guard lock(status_mu);
-        last_frame_error = e.what();
+        last_frame_error = error;
         continue;
       }
-      if (grey.cols != vis.camera.width || grey.rows != vis.camera.height) {
-        frame_errors.fetch_add(1);
-        std::lock_guard lock(status_mu);
-        last_frame_error = "frame is " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
-                           " but the camera intrinsics are for " + std::to_string(vis.camera.width) + "x" +
-                           std::to_string(vis.camera.height);
-        continue;
-      }
-      auto markers = tracker.Track(grey);
-      p.num_markers = std::min<int>(static_cast<int>(markers.size()), kMaxMarkers);
-      for (int i = 0; i < p.num_markers; ++i) {
-        p.u[static_cast<size_t>(i)] = markers[static_cast<size_t>(i)].centre_px.x();
-        p.v[static_cast<size_t>(i)] = markers[static_cast<size_t>(i)].centre_px.y();
-        p.id[static_cast<size_t>(i)] = markers[static_cast<size_t>(i)].id;
-      }
-      if (static_cast<int>(markers.size()) == nm && nm <= kMaxMarkers) SolvePose(markers, &obj, &norm, &p, &last_pose, &have_last);
-      if (!p.valid) have_last = false;
       (p.valid ? poses_valid : poses_invalid).fetch_add(1);
       // Publish the pose (and markers) now: this is the frame-to-publish latency.
       pose_msg.schema_version = 1;
@@ -318,50 +284,6 @@ struct Daemon::Impl {
       pose_q.Push(p);
     }
     pose_q.Close();
-  }
-
-  void SolvePose(std::vector<vision::Marker>& markers, std::array<Eigen::Vector3d, kMaxMarkers>* obj,
-                 std::array<Eigen::Vector2d, kMaxMarkers>* norm, PoseSample* p, Eigen::Vector3d* last_pose,
-                 bool* have_last) {
-    const int nm = static_cast<int>(markers.size());
-    for (int i = 0; i < nm; ++i) {
-      const auto& m = markers[static_cast<size_t>(i)];
-      if (m.id < 0) return;
-      const auto& q = vis.layout.markers[static_cast<size_t>(m.id)];
-      (*obj)[static_cast<size_t>(i)] = Eigen::Vector3d(q.x(), q.y(), 0.0);
-      (*norm)[static_cast<size_t>(i)] = vis.camera.PixelToNormalized(m.centre_px);
-    }
-    const std::span<const Eigen::Vector3d> o(obj->data(), static_cast<size_t>(nm));
-    const std::span<const Eigen::Vector2d> n(norm->data(), static_cast<size_t>(nm));
-    Eigen::Vector3d init = *last_pose;
-    vision::Pose3 pose3;
-    if (!*have_last || cfg.pose.method == "lowe") {
-      if (!vision::PlanarInitialPose(o, n, &pose3)) return;
-      init = FloorPoseOf(vis.floor, pose3);
-    }
-    if (cfg.pose.method == "ground_plane") {
-      auto r = vision::GroundPlanePose(vis.floor, cfg.target.height_m, o, n, init, vis.camera.fx, cfg.pose.sigma_px);
-      if (!r.ok || !(r.rms_px <= cfg.pose.max_rms_px) || !r.xytheta.allFinite()) return;
-      p->xytheta = r.xytheta;
-      p->covariance = r.covariance;
-      p->rms_px = r.rms_px;
-    } else {
-      const auto r = vision::LowePose(o, n, pose3, vis.camera.fx, cfg.pose.sigma_px);
-      if (!r.ok || !(r.rms_px <= cfg.pose.max_rms_px)) return;
-      p->xytheta = FloorPoseOf(vis.floor, r.pose);
-      // (x, y) are linear in the translation D; theta moves with the floor-z component
-      // of the rotation increment.
-      Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
-      const Eigen::Matrix3d Rfc = vis.floor.R_cf.transpose();
-      J.block<2, 3>(0, 0) = Rfc.topRows<2>();
-      J.block<1, 3>(2, 3) = Rfc.row(2);
-      p->covariance = J * r.covariance * J.transpose();
-      p->rms_px = r.rms_px;
-    }
-    p->xytheta.z() = WrapAngle(p->xytheta.z());
-    p->valid = true;
-    *last_pose = p->xytheta;
-    *have_last = true;
   }
 
   // ---- filter thread ------------------------------------------------------------------

@@ -1,0 +1,40 @@
+// The detection/pose stage of kincald, one frame at a time: decode to grey, find and
+// identify the target's markers (tracking a region of interest, falling back to the whole
+// frame), and solve the target's planar pose on the floor (ground-plane solver, or the
+// fully projective Lowe pose brought onto the floor). Used by the daemon's detection
+// thread and directly by tests that feed frames from a real driver.
+#pragma once
+
+#include <array>
+#include <string>
+
+#include "kincal/daemon/config.h"
+#include "kincal/daemon/frame.h"
+#include "kincal/daemon/sources.h"
+#include "kincal/vision/markers.h"
+
+namespace kincal::daemon {
+
+class PoseStage {
+ public:
+  PoseStage(const DaemonConfig& c, const VisionSetup& v);
+  // Fills *out (times and sequence from the frame). Returns false with *error set when the
+  // frame cannot be decoded or has the wrong size; a frame without the target gives a
+  // pose with valid = false and returns true.
+  bool Process(const Frame& f, PoseSample* out, std::string* error);
+  const cv::Mat& grey() const { return grey_; }
+
+ private:
+  void Solve(const std::vector<vision::Marker>& markers, PoseSample* p);
+
+  const DaemonConfig& cfg_;
+  const VisionSetup& vis_;
+  vision::MarkerTracker tracker_;
+  cv::Mat grey_;
+  std::array<Eigen::Vector3d, kMaxMarkers> obj_;
+  std::array<Eigen::Vector2d, kMaxMarkers> norm_;
+  Eigen::Vector3d last_pose_ = Eigen::Vector3d::Zero();
+  bool have_last_ = false;
+};
+
+}  // namespace kincal::daemon

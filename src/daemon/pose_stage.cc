@@ -1,0 +1,111 @@
+// Detection and pose of one frame.
+#include "kincal/daemon/pose_stage.h"
+
+#include "kincal/angles.h"
+#include "kincal/vision/pose.h"
+
+namespace kincal::daemon {
+namespace {
+
+Eigen::Vector3d FloorPoseOf(const vision::FloorExtrinsics& floor, const vision::Pose3& p) {
+  const Eigen::Matrix3d Rft = floor.R_cf.transpose() * p.R;
+  const Eigen::Vector3d o = floor.R_cf.transpose() * (p.t - floor.t_cf);
+  return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
+}
+
+vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Vector3d& xyt, double height) {
+  vision::Pose3 p;
+  p.R = floor.R_cf * Eigen::AngleAxisd(xyt.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  p.t = floor.R_cf * Eigen::Vector3d(xyt.x(), xyt.y(), height) + floor.t_cf;
+  return p;
+}
+
+}  // namespace
+
+PoseStage::PoseStage(const DaemonConfig& c, const VisionSetup& v)
+    : cfg_(c), vis_(v), tracker_(v.camera, v.layout, c.detector) {}
+
+bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
+  *p = PoseSample{};
+  p->utime = f.utime;
+  p->device_utime = f.device_utime;
+  p->sequence = f.sequence;
+  p->arrival_mono_ns = f.arrival_mono_ns;
+  try {
+    ToGrey(f, &grey_);
+  } catch (const FrameError& e) {
+    *error = e.what();
+    return false;
+  }
+  if (grey_.cols != vis_.camera.width || grey_.rows != vis_.camera.height) {
+    *error = "frame is " + std::to_string(grey_.cols) + "x" + std::to_string(grey_.rows) +
+             " but the camera intrinsics are for " + std::to_string(vis_.camera.width) + "x" +
+             std::to_string(vis_.camera.height);
+    return false;
+  }
+  auto markers = tracker_.Track(grey_);
+  p->num_markers = std::min<int>(static_cast<int>(markers.size()), kMaxMarkers);
+  for (int i = 0; i < p->num_markers; ++i) {
+    const auto& m = markers[static_cast<size_t>(i)];
+    p->u[static_cast<size_t>(i)] = m.centre_px.x();
+    p->v[static_cast<size_t>(i)] = m.centre_px.y();
+    p->id[static_cast<size_t>(i)] = m.id;
+  }
+  if (markers.size() == vis_.layout.markers.size() && markers.size() <= static_cast<size_t>(kMaxMarkers)) {
+    Solve(markers, p);
+    // The centre of a marker's image is not the image of its centre: correct by the
+    // current pose and solve once more.
+    if (p->valid) {
+      vision::CorrectPerspectiveBias(vis_.camera, CameraPoseOf(vis_.floor, p->xytheta, cfg_.target.height_m),
+                                     vis_.layout, &markers);
+      Solve(markers, p);
+    }
+  }
+  if (!p->valid) have_last_ = false;
+  return true;
+}
+
+void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p) {
+  p->valid = false;
+  const int nm = static_cast<int>(markers.size());
+  for (int i = 0; i < nm; ++i) {
+    const auto& m = markers[static_cast<size_t>(i)];
+    if (m.id < 0) return;
+    const auto& q = vis_.layout.markers[static_cast<size_t>(m.id)];
+    obj_[static_cast<size_t>(i)] = Eigen::Vector3d(q.x(), q.y(), 0.0);
+    norm_[static_cast<size_t>(i)] = vis_.camera.PixelToNormalized(m.centre_px);
+  }
+  const std::span<const Eigen::Vector3d> o(obj_.data(), static_cast<size_t>(nm));
+  const std::span<const Eigen::Vector2d> n(norm_.data(), static_cast<size_t>(nm));
+  Eigen::Vector3d init = last_pose_;
+  vision::Pose3 pose3;
+  if (!have_last_ || cfg_.pose.method == "lowe") {
+    if (!vision::PlanarInitialPose(o, n, &pose3)) return;
+    init = FloorPoseOf(vis_.floor, pose3);
+  }
+  if (cfg_.pose.method == "ground_plane") {
+    const auto r = vision::GroundPlanePose(vis_.floor, cfg_.target.height_m, o, n, init, vis_.camera.fx, cfg_.pose.sigma_px);
+    if (!r.ok || !(r.rms_px <= cfg_.pose.max_rms_px) || !r.xytheta.allFinite()) return;
+    p->xytheta = r.xytheta;
+    p->covariance = r.covariance;
+    p->rms_px = r.rms_px;
+  } else {
+    const auto r = vision::LowePose(o, n, pose3, vis_.camera.fx, cfg_.pose.sigma_px);
+    if (!r.ok || !(r.rms_px <= cfg_.pose.max_rms_px)) return;
+    p->xytheta = FloorPoseOf(vis_.floor, r.pose);
+    // (x, y) are linear in the translation D; theta moves with the floor-z component of
+    // the rotation increment.
+    Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
+    const Eigen::Matrix3d Rfc = vis_.floor.R_cf.transpose();
+    J.block<2, 3>(0, 0) = Rfc.topRows<2>();
+    J.block<1, 3>(2, 3) = Rfc.row(2);
+    p->covariance = J * r.covariance * J.transpose();
+    p->rms_px = r.rms_px;
+  }
+  p->xytheta.z() = WrapAngle(p->xytheta.z());
+  p->valid = true;
+  last_pose_ = p->xytheta;
+  have_last_ = true;
+}
+
+}  // namespace kincal::daemon
