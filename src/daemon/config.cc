@@ -125,6 +125,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("margin_px", &c.sim.margin_px);
     s.Get("carry_s", &c.sim.carry_s);
     s.Get("noise_grey", &c.sim.noise_grey);
+    s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
     s.CheckUnknown();
   }
   {

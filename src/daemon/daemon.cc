@@ -14,12 +14,15 @@
 #include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
+#include <limits>
+#include <optional>
 #include <opencv2/imgcodecs.hpp>
 #include <thread>
 
 #include "kincal/analysis/model_check.h"
 #include "kincal/angles.h"
 #include "kincal/daemon/bounded_queue.h"
+#include "kincal/daemon/lcm_guard.h"
 #include "kincal/daemon/pose_stage.h"
 #include "kincal/daemon/recorder.h"
 #include "kincal/daemon/sources.h"
@@ -118,6 +121,7 @@ struct Daemon::Impl {
   std::atomic<int64_t> last_frame_mono{0}, last_control_mono{0};
   LatencyHistogram latency_total, latency_window;
   Checkpoint estimate;
+  std::optional<Checkpoint> resume;
 
   explicit Impl(DaemonConfig c)
       : cfg(std::move(c)),
@@ -130,6 +134,10 @@ struct Daemon::Impl {
         control_q(static_cast<size_t>(cfg.queues.controls), live_policy) {}
 
   int64_t Now() const { return RealtimeUtime(); }
+  // Controls come over LCM (a real robot, or the simulated one told to use LCM).
+  bool subscribes() const {
+    return cfg.source == "v4l2" || cfg.source == "libcamera" || (cfg.source == "sim" && cfg.sim.controls_via_lcm);
+  }
 
   // ---- output -------------------------------------------------------------------------
   template <typename Msg>
@@ -151,7 +159,9 @@ struct Daemon::Impl {
   void OnControls(const void* data, size_t n, int64_t receive_utime) {
     thread_local kincal::controls_t m;
     if (recorder) recorder->Write(cfg.lcm.controls_channel, receive_utime, data, n);
-    if (m.decode(data, 0, static_cast<int>(n)) < 0 || m.num_controls < 0 ||
+    std::string why;
+    if (n > (1u << 20) || !PlausibleControls(data, n, kMaxControls, &why) ||
+        m.decode(data, 0, static_cast<int>(n)) < 0 || m.num_controls < 0 ||
         m.num_controls > kMaxControls || m.model != sys.model().name()) {
       controls_rejected.fetch_add(1);
       return;
@@ -226,7 +236,12 @@ struct Daemon::Impl {
     }
     source_done.store(true);
     frame_q.Close();
-    if (cfg.source == "sim" || cfg.source == "replay") controls_done.store(true);  // they carry the controls
+    if (cfg.source == "replay" || (cfg.source == "sim" && !cfg.sim.controls_via_lcm)) {
+      controls_done.store(true);  // the source carried the controls: there are no more
+    } else if (cfg.source == "sim") {
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let LCM deliver the last ones
+      controls_done.store(true);
+    }
   }
 
   // ---- detection / pose thread --------------------------------------------------------
@@ -295,7 +310,9 @@ struct Daemon::Impl {
     ControlSample c;
     int64_t max_control_utime = INT64_MIN;
     int64_t last_pose_utime = 0;
-    int64_t last_params_utime = INT64_MIN, last_check_utime = INT64_MIN, last_checkpoint_utime = 0;
+    // "Long ago" without overflow in the differences below.
+    constexpr int64_t kLongAgo = std::numeric_limits<int64_t>::min() / 4;
+    int64_t last_params_utime = kLongAgo, last_check_utime = kLongAgo, last_checkpoint_utime = 0;
     kincal::params_t params_msg{};
     const int np = sys.num_params();
     // The prior: a checkpoint to resume from, or the configured guess.
@@ -306,7 +323,7 @@ struct Daemon::Impl {
                        std::max(std::abs(prior[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
       prior_cov(i, i) = s * s;
     }
-    if (!cfg.checkpoint.resume.empty()) ApplyResume(&prior, &prior_cov);
+    if (resume) ApplyResume(*resume, &prior, &prior_cov);
     const Eigen::VectorXd prior_sigma = prior_cov.diagonal().cwiseSqrt();
     OnlineCalibratorOptions opt;
     opt.filter = cfg.filter.type;
@@ -447,12 +464,7 @@ struct Daemon::Impl {
     filter_done.store(true);
   }
 
-  void ApplyResume(VecN<kMaxState>* prior, StateMat* prior_cov) {
-    const Checkpoint ck = ReadCheckpoint(cfg.checkpoint.resume);
-    if (ck.model != sys.model().name()) {
-      throw std::runtime_error(cfg.checkpoint.resume + ": checkpoint is for model '" + ck.model + "', config says '" +
-                               std::string(sys.model().name()) + "'");
-    }
+  void ApplyResume(const Checkpoint& ck, VecN<kMaxState>* prior, StateMat* prior_cov) {
     // Parameters are matched by name; any the checkpoint lacks keep the configured prior.
     int matched = 0;
     for (size_t i = 0; i < ck.names.size(); ++i) {
@@ -481,6 +493,22 @@ struct Daemon::Impl {
     } catch (const std::exception& e) {
       spdlog::error("{}", e.what());
     }
+  }
+
+  // An unrecoverable error in a pipeline thread: report it, close the queues so every
+  // thread drains and ends, and make Run() return 1.
+  void Fatal(const std::string& what) {
+    spdlog::error("{}", what);
+    {
+      std::lock_guard lock(status_mu);
+      if (source_error.empty()) source_error = what;
+    }
+    stop.store(true);
+    controls_done.store(true);
+    frame_q.Close();
+    pose_q.Close();
+    control_q.Close();
+    filter_done.store(true);
   }
 
   // ---- health (main thread) -----------------------------------------------------------
@@ -519,7 +547,7 @@ struct Daemon::Impl {
     if (now.log_events_lost > prev->log_events_lost) add("log events lost");
     if (now.controls_rejected > prev->controls_rejected) add("rejected control messages");
     if (!cfg.record.path.empty() && recorder && !recorder->error().empty()) add(recorder->error());
-    if (cfg.source != "sim" && cfg.source != "replay" && now.controls_received == 0 && now.frames_captured > 0) {
+    if (subscribes() && now.controls_received == 0 && now.frames_captured > 0) {
       add("no controls received on " + cfg.lcm.controls_channel);
     }
     h.ok = problems.empty() ? 1 : 0;
@@ -557,6 +585,13 @@ Daemon::Daemon(DaemonConfig config) {
   impl_ = std::make_unique<Impl>(std::move(config));
   Impl& d = *impl_;
   DaemonConfig& cfg = d.cfg;
+  if (!cfg.checkpoint.resume.empty()) {
+    d.resume = ReadCheckpoint(cfg.checkpoint.resume);
+    if (d.resume->model != d.sys.model().name()) {
+      throw std::runtime_error(cfg.checkpoint.resume + ": checkpoint is for model '" + d.resume->model +
+                               "', the config says '" + std::string(d.sys.model().name()) + "'");
+    }
+  }
   d.lcm = std::make_unique<lcm::LCM>(cfg.lcm.url);
   if (!d.lcm->good()) {
     throw std::runtime_error("LCM: cannot open '" + (cfg.lcm.url.empty() ? std::string("default URL") : cfg.lcm.url) +
@@ -578,7 +613,7 @@ Daemon::Daemon(DaemonConfig config) {
   } else {
     d.source = MakeLibcameraSource(cfg.libcamera);
   }
-  if (cfg.source == "v4l2" || cfg.source == "libcamera") {
+  if (d.subscribes()) {
     d.lcm->subscribeFunction(
         cfg.lcm.controls_channel,
         +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Impl* self) {
@@ -600,10 +635,20 @@ int Daemon::Run() {
                d.cfg.robot.effects.empty() ? "" : " + effects", d.cfg.filter.type,
                d.cfg.lcm.url.empty() ? "default" : d.cfg.lcm.url,
                d.cfg.record.path.empty() ? "" : ", recording to " + d.cfg.record.path);
-  std::thread capture([&d] { d.CaptureLoop(); });
-  std::thread detection([&d] { d.DetectionLoop(); });
-  std::thread filter([&d] { d.FilterLoop(); });
-  const bool subscribe = d.cfg.source == "v4l2" || d.cfg.source == "libcamera";
+  // A thread that fails records why and stops the pipeline; it never takes the process down.
+  auto guarded = [&d](const char* name, void (Impl::*loop)()) {
+    return std::thread([&d, name, loop] {
+      try {
+        (d.*loop)();
+      } catch (const std::exception& e) {
+        d.Fatal(std::string(name) + " thread: " + e.what());
+      }
+    });
+  };
+  std::thread capture = guarded("capture", &Impl::CaptureLoop);
+  std::thread detection = guarded("detection", &Impl::DetectionLoop);
+  std::thread filter = guarded("filter", &Impl::FilterLoop);
+  const bool subscribe = d.subscribes();
   std::thread lcm_thread([&d, subscribe] {
     while (!d.filter_done.load()) {
       if (subscribe) {

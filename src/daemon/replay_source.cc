@@ -7,6 +7,7 @@
 #include <cstring>
 #include <thread>
 
+#include "kincal/daemon/lcm_guard.h"
 #include "kincal/daemon/sources.h"
 
 namespace kincal::daemon {
@@ -48,7 +49,9 @@ class ReplaySource final : public FrameSource {
         ++skipped_;
         continue;
       }
-      if (msg_.decode(ev->data, 0, ev->datalen) < 0 || msg_.size != static_cast<int32_t>(msg_.data.size())) {
+      std::string why;
+      if (!PlausibleFrame(ev->data, static_cast<size_t>(ev->datalen), &why) ||
+          msg_.decode(ev->data, 0, ev->datalen) < 0 || msg_.size != static_cast<int32_t>(msg_.data.size())) {
         *error = cfg_.replay.path + ": event " + std::to_string(ev->eventnum) + " on " + std::string(channel) +
                  ": not a kincal.frame_t";
         ++bad_frames_;

@@ -138,7 +138,7 @@ class SimSource final : public FrameSource {
     buf_.resize(static_cast<size_t>(n));
     msg_.encode(buf_.data(), 0, n);
     publish_(cfg_.lcm.controls_channel, buf_.data(), buf_.size());
-    intake_(buf_.data(), buf_.size(), msg_.utime);
+    if (!cfg_.sim.controls_via_lcm) intake_(buf_.data(), buf_.size(), msg_.utime);
   }
 
   const DaemonConfig& cfg_;

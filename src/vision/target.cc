@@ -76,6 +76,23 @@ RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const Targ
     const int iv1 = std::min(cam.height - 1, static_cast<int>(std::ceil(v1)) + 2);
     for (int v = iv0; v <= iv1; ++v) {
       for (int u = iu0; u <= iu1; ++u) {
+        // Pixels well inside or well outside the disk need no supersampling: compare the
+        // pixel centre's distance from the marker centre on the plate with a generous
+        // bound on the pixel's footprint there.
+        {
+          const Eigen::Vector2d nn = cam.PixelToNormalized(Eigen::Vector2d(u, v));
+          const Eigen::Vector3d ray(nn.x(), nn.y(), 1.0);
+          const double cosine = std::abs(n.dot(ray)) / ray.norm();
+          const double lambda = d / n.dot(ray);
+          const Eigen::Vector3d X = pose.R.transpose() * (lambda * ray - pose.t);
+          const double footprint = 2.0 * std::abs(lambda) * ray.norm() / (std::min(cam.fx, cam.fy) * std::max(cosine, 0.1));
+          const double dist = (X.head<2>() - m).norm();
+          if (dist > layout.marker_radius_m + footprint) continue;
+          if (dist < layout.marker_radius_m - footprint) {
+            img.at<double>(v, u) = opt.foreground;
+            continue;
+          }
+        }
         int inside = 0;
         for (int sy = 0; sy < s; ++sy) {
           for (int sx = 0; sx < s; ++sx) {

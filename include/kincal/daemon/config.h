@@ -49,6 +49,9 @@ struct SimOptions {
   double margin_px = 40.0;   // a run ends when the target comes this close to the image edge
   double carry_s = 1.0;      // the robot is carried back to the centre (no target in view)
   double noise_grey = 2.0;   // image noise, grey levels
+  // false: the simulated robot hands its controls to the filter directly (and publishes
+  // them); true: they reach the filter only through LCM, like a real robot's.
+  bool controls_via_lcm = false;
 };
 
 struct ReplayOptions {
