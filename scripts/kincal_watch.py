@@ -1,0 +1,176 @@
+#!/usr/bin/env python3
+"""Watch a running kincald over LCM: parameters with +-sigma, model check and health.
+
+    kincal_watch.py [--url URL] [--plot] [--timeout S] [--until-converged]
+                    [--expect NAME=VALUE ...] [--lcm-types DIR]
+
+Prints one line per second with every parameter as value +- 1 sigma and the filter's
+status, plus any health problem or model-check suspicion as it arrives. --plot opens a
+live matplotlib window with each parameter and its +-2 sigma band. --expect checks, when
+the watch ends, that each named parameter lies within 3 sigma of the given value (exit
+status 1 if not), which makes the script usable as an end-to-end test.
+
+The LCM types come from the generated Python package `kincal` (installed with kincal, or
+build/lcmgen/python in a build tree: --lcm-types). LCM's bindings: `pip install lcm`.
+"""
+import argparse
+import math
+import os
+import select
+import sys
+import time
+
+
+def import_types(path):
+    candidates = [path] if path else []
+    here = os.path.dirname(os.path.abspath(__file__))
+    candidates.append(os.path.join(here, "..", "build", "lcmgen", "python"))
+    for c in candidates:
+        if c and os.path.isdir(os.path.join(c, "kincal")):
+            sys.path.insert(0, c)
+            break
+    try:
+        from kincal import health_t, model_check_t, params_t  # noqa: F401
+    except ImportError as e:
+        sys.exit(f"kincal_watch: cannot import the kincal LCM types ({e}); pass --lcm-types DIR")
+    return params_t, health_t, model_check_t
+
+
+STATUS = {0: "initializing", 1: "converging", 2: "converged", 3: "DIVERGED"}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--url", default=os.environ.get("LCM_DEFAULT_URL", ""), help="LCM URL (default: LCM's)")
+    ap.add_argument("--params-channel", default="KINCAL_PARAMS")
+    ap.add_argument("--health-channel", default="KINCAL_HEALTH")
+    ap.add_argument("--model-check-channel", default="KINCAL_MODEL_CHECK")
+    ap.add_argument("--lcm-types", default="", help="directory holding the generated 'kincal' package")
+    ap.add_argument("--plot", action="store_true", help="live plot with +-2 sigma bands (matplotlib)")
+    ap.add_argument("--timeout", type=float, default=0.0, help="stop after S seconds (0: never)")
+    ap.add_argument("--idle-timeout", type=float, default=0.0,
+                    help="stop when no parameters arrive for S seconds after the first (0: never)")
+    ap.add_argument("--until-converged", action="store_true", help="stop when the daemon reports convergence")
+    ap.add_argument("--expect", action="append", default=[], metavar="NAME=VALUE",
+                    help="at the end, require NAME within 3 sigma of VALUE")
+    args = ap.parse_args()
+    try:
+        import lcm
+    except ImportError:
+        sys.exit("kincal_watch: LCM's Python bindings are missing (pip install lcm, or scripts/setup's .venv)")
+    params_t, health_t, model_check_t = import_types(args.lcm_types)
+
+    expect = {}
+    for e in args.expect:
+        name, _, value = e.partition("=")
+        try:
+            expect[name] = float(value)
+        except ValueError:
+            sys.exit(f"kincal_watch: --expect {e}: expected NAME=VALUE")
+
+    lc = lcm.LCM(args.url) if args.url else lcm.LCM()
+    state = {"last": None, "history": [], "printed": 0.0, "received": 0, "last_rx": None}
+
+    def on_params(_channel, data):
+        try:
+            m = params_t.decode(data)
+        except (ValueError, Exception) as exc:  # a malformed message is reported, not fatal
+            print(f"kincal_watch: undecodable params message: {exc}", file=sys.stderr)
+            return
+        state["last"] = m
+        state["received"] += 1
+        state["last_rx"] = time.monotonic()
+        state["history"].append((m.utime * 1e-6, list(m.values), list(m.sigmas)))
+        now = time.monotonic()
+        if now - state["printed"] >= 1.0:
+            state["printed"] = now
+            cells = "  ".join(f"{n} = {v:.6g} +- {s:.2g} {u}" for n, v, s, u in
+                              zip(m.names, m.values, m.sigmas, m.units))
+            print(f"[{m.model}/{m.estimator} {STATUS.get(m.status, m.status)}, {m.update_count} updates]  {cells}",
+                  flush=True)
+
+    def on_health(_channel, data):
+        try:
+            h = health_t.decode(data)
+        except Exception:
+            return
+        if not h.ok:
+            print(f"health: {h.message}", flush=True)
+
+    def on_check(_channel, data):
+        try:
+            c = model_check_t.decode(data)
+        except Exception:
+            return
+        if not c.consistent and c.suspected_effect:
+            print(f"model check: residuals suggest '{c.suspected_effect}' (confidence {c.confidence:.2f}): "
+                  f"{c.evidence}", flush=True)
+
+    lc.subscribe(args.params_channel, on_params)
+    lc.subscribe(args.health_channel, on_health)
+    lc.subscribe(args.model_check_channel, on_check)
+
+    fig = lines = None
+    if args.plot:
+        import matplotlib.pyplot as plt
+        plt.ion()
+        fig = plt.figure(figsize=(9, 6))
+        lines = {}
+    start = time.monotonic()
+    last_draw = 0.0
+    while True:
+        ready, _, _ = select.select([lc.fileno()], [], [], 0.1)
+        if ready:
+            lc.handle()
+        now = time.monotonic()
+        m = state["last"]
+        if args.timeout and now - start > args.timeout:
+            break
+        if args.idle_timeout and state["last_rx"] and now - state["last_rx"] > args.idle_timeout:
+            break
+        if args.until_converged and m is not None and m.status == 2:
+            break
+        if fig is not None and m is not None and now - last_draw > 0.5:
+            last_draw = now
+            draw(fig, lines, m, state["history"])
+    m = state["last"]
+    if m is None:
+        print("kincal_watch: no parameters received", file=sys.stderr)
+        return 1
+    ok = True
+    for name, value in expect.items():
+        if name not in m.names:
+            print(f"kincal_watch: the daemon estimates no '{name}' (it has {', '.join(m.names)})", file=sys.stderr)
+            ok = False
+            continue
+        i = m.names.index(name)
+        z = (m.values[i] - value) / m.sigmas[i] if m.sigmas[i] > 0 else math.inf
+        verdict = "ok" if abs(z) <= 3 else "OUTSIDE 3 sigma"
+        print(f"{name}: {m.values[i]:.6g} +- {m.sigmas[i]:.2g} vs expected {value:.6g} ({z:+.1f} sigma) {verdict}")
+        ok = ok and abs(z) <= 3
+    print(f"kincal_watch: {state['received']} parameter messages, last status {STATUS.get(m.status, m.status)}")
+    return 0 if ok else 1
+
+
+def draw(fig, lines, m, history):
+    import matplotlib.pyplot as plt
+    n = len(m.names)
+    if not fig.axes or len(fig.axes) != n:
+        fig.clf()
+        fig.subplots(n, 1, sharex=True)
+    t0 = history[0][0]
+    t = [h[0] - t0 for h in history if len(h[1]) == n]
+    for i, ax in enumerate(fig.axes):
+        v = [h[1][i] for h in history if len(h[1]) == n]
+        s = [h[2][i] for h in history if len(h[2]) == n]
+        ax.cla()
+        ax.plot(t, v, color="C0")
+        ax.fill_between(t, [a - 2 * b for a, b in zip(v, s)], [a + 2 * b for a, b in zip(v, s)], color="C0", alpha=0.25)
+        ax.set_ylabel(f"{m.names[i]} [{m.units[i]}]")
+    fig.axes[-1].set_xlabel("time [s]")
+    fig.suptitle(f"kincald: {m.model} ({m.estimator}), {m.update_count} updates, +-2 sigma")
+    plt.pause(0.001)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -244,6 +244,11 @@ void Validate(const DaemonConfig& c) {
     Require(c.sim.duration_s >= 0 && c.sim.margin_px >= 0 && c.sim.carry_s >= 0 && c.sim.noise_grey >= 0,
             "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0");
   }
+  if (c.source == "sim" && c.sim.controls_via_lcm && c.sim.speed != 1.0) {
+    Require(c.robot.control_stamp == "sender",
+            "sim.controls_via_lcm at sim.speed != 1: receive stamps are wall-clock times, the simulation's are "
+            "not; set robot.control_stamp: sender");
+  }
   if (c.source == "replay") {
     Require(!c.replay.path.empty(), "replay.path (or --replay FILE) must name an LCM log");
     Require(c.replay.speed >= 0, "replay.speed must be >= 0 (0: --fast)");
