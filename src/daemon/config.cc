@@ -155,6 +155,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("max_area_px", &c.detector.max_area_px);
     s.Get("min_circularity", &c.detector.min_circularity);
     s.Get("min_fill", &c.detector.min_fill);
+    s.Get("min_contrast", &c.detector.min_contrast);
     s.CheckUnknown();
   }
   {

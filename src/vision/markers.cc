@@ -15,8 +15,9 @@ namespace kincal::vision {
 
 bool DetectorOptions::IsValid(std::string* error) const {
   if (threshold > 255 || min_area_px < 1 || max_area_px < min_area_px || !(min_circularity > 0) ||
-      min_circularity > 1 || !(min_fill > 0) || min_fill > 1) {
-    *error = "detector: threshold <= 255, 1 <= min_area <= max_area, circularity and fill in (0, 1]";
+      min_circularity > 1 || !(min_fill > 0) || min_fill > 1 || min_contrast < 0 || min_contrast > 255) {
+    *error = "detector: threshold <= 255, 1 <= min_area <= max_area, circularity and fill in (0, 1], "
+             "min_contrast in [0, 255]";
     return false;
   }
   return true;
@@ -44,8 +45,10 @@ struct Run {
   int x0, x1, blob;
 };
 
-// Otsu threshold from a histogram of every other pixel of every other row.
-int OtsuThreshold(const cv::Mat& view) {
+// Otsu threshold from a histogram of every other pixel of every other row; -1 when the
+// two classes it separates differ by less than `min_contrast` grey levels (an empty,
+// noisy view: thresholding it would only produce noise blobs).
+int OtsuThreshold(const cv::Mat& view, int min_contrast) {
   std::array<int64_t, 256> hist{};
   int64_t n = 0;
   for (int y = 0; y < view.rows; y += 2) {
@@ -60,6 +63,7 @@ int OtsuThreshold(const cv::Mat& view) {
   double sum_b = 0, best = -1;
   int64_t w_b = 0;
   int thr = 128;
+  double contrast = 0.0;
   for (int t = 0; t < 256; ++t) {
     w_b += hist[static_cast<size_t>(t)];
     if (w_b == 0) continue;
@@ -71,9 +75,10 @@ int OtsuThreshold(const cv::Mat& view) {
     if (between > best) {
       best = between;
       thr = t;
+      contrast = m_f - m_b;
     }
   }
-  return thr;
+  return contrast >= min_contrast ? thr : -1;
 }
 
 // Foreground test: dark-on-light markers are p <= thr, light-on-dark p > thr.
@@ -174,7 +179,8 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
   std::vector<Marker> out;
   if (roi.area() == 0) return out;
   const cv::Mat view = grey(roi);
-  const int thr = opt.threshold >= 0 ? opt.threshold : OtsuThreshold(view);
+  const int thr = opt.threshold >= 0 ? opt.threshold : OtsuThreshold(view, opt.min_contrast);
+  if (thr < 0) return out;
   thread_local std::vector<Blob> blobs;
   blobs.clear();
   if (opt.dark_on_light) {

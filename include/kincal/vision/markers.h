@@ -24,6 +24,7 @@ struct DetectorOptions {
   int max_area_px = 40000;
   double min_circularity = 0.6;  // minor/major axis ratio of the blob's ellipse
   double min_fill = 0.6;         // blob area / area of that ellipse
+  int min_contrast = 20;         // Otsu: grey levels between the classes, else no markers
   bool IsValid(std::string* error) const;
 };
 

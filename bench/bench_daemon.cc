@@ -1,0 +1,88 @@
+// kincald end to end: replay throughput in --fast mode and frame-to-publish latency at
+// --speed 1, on a recorded raw 640x480 GREY 30 fps log of the simulated robot.
+#include <benchmark/benchmark.h>
+#include <spdlog/spdlog.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include "kincal/daemon/daemon.h"
+
+namespace kincal::daemon {
+namespace {
+
+DaemonConfig Base() {
+  DaemonConfig c = LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml");
+  c.lcm.url = "memq://";
+  return c;
+}
+
+// A 20 s recording (600 frames), made once per process.
+const std::string& Log() {
+  static const std::string path = [] {
+    spdlog::set_level(spdlog::level::warn);
+    const auto p = std::filesystem::temp_directory_path() / ("kincal_bench_" + std::to_string(::getpid()) + ".lcm");
+    DaemonConfig c = Base();
+    c.sim.speed = 0;
+    c.sim.duration_s = 20;
+    c.record.path = p.string();
+    Daemon d(c);
+    d.Run();
+    return p.string();
+  }();
+  return path;
+}
+
+double PeakRssMb() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  }
+  return 0.0;
+}
+
+void BM_DaemonReplayFast(benchmark::State& state) {
+  const std::string& log = Log();
+  int64_t frames = 0;
+  double seconds = 0;
+  for (auto _ : state) {
+    DaemonConfig c = Base();
+    c.source = "replay";
+    c.replay.path = log;
+    c.replay.speed = 0;
+    Daemon d(c);
+    const auto t0 = std::chrono::steady_clock::now();
+    d.Run();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    frames += d.counters().frames_captured;
+  }
+  state.counters["frames_per_s"] = static_cast<double>(frames) / seconds;
+  state.counters["x_realtime"] = static_cast<double>(frames) / 30.0 / seconds;
+  state.counters["peak_rss_mb"] = PeakRssMb();
+}
+BENCHMARK(BM_DaemonReplayFast)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_DaemonLatencySpeed1(benchmark::State& state) {
+  const std::string& log = Log();
+  DaemonCounters c{};
+  for (auto _ : state) {
+    DaemonConfig cfg = Base();
+    cfg.source = "replay";
+    cfg.replay.path = log;
+    cfg.replay.speed = 1;
+    Daemon d(cfg);
+    d.Run();
+    c = d.counters();
+  }
+  state.counters["latency_p50_ms"] = c.latency_p50_ms;
+  state.counters["latency_p99_ms"] = c.latency_p99_ms;
+  state.counters["latency_max_ms"] = c.latency_max_ms;
+  state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
+  state.counters["peak_rss_mb"] = PeakRssMb();
+}
+BENCHMARK(BM_DaemonLatencySpeed1)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+}  // namespace
+}  // namespace kincal::daemon
