@@ -20,10 +20,14 @@
 
 namespace {
 
-// Without --config: the simulated robot (config/kincald_sim.yaml) from the install or
-// the source tree.
+// Without --config: the simulated robot (config/kincald_sim.yaml) beside the executable
+// (PREFIX/bin -> PREFIX/share/kincal), in the configured install prefix, or in the source tree.
 std::string DefaultConfig() {
-  for (const std::string& dir : {std::string(KINCAL_INSTALL_DATADIR) + "/config", std::string(KINCAL_SOURCE_DIR) + "/config"}) {
+  std::error_code ec;
+  const auto exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+  const std::string beside = ec ? std::string() : (exe.parent_path().parent_path() / "share/kincal/config").string();
+  for (const std::string& dir : {beside, std::string(KINCAL_INSTALL_DATADIR) + "/config", std::string(KINCAL_SOURCE_DIR) + "/config"}) {
+    if (dir.empty()) continue;
     const auto p = std::filesystem::path(dir) / "kincald_sim.yaml";
     if (std::filesystem::exists(p)) return p.string();
   }

@@ -3,12 +3,14 @@
 
     kincal_watch.py [--url URL] [--plot] [--timeout S] [--until-converged]
                     [--expect NAME=VALUE ...] [--lcm-types DIR]
+    kincal_watch.py --log FILE.lcm [--png OUT.png] [--expect NAME=VALUE ...]
 
 Prints one line per second with every parameter as value +- 1 sigma and the filter's
 status, plus any health problem or model-check suspicion as it arrives. --plot opens a
 live matplotlib window with each parameter and its +-2 sigma band. --expect checks, when
 the watch ends, that each named parameter lies within 3 sigma of the given value (exit
-status 1 if not), which makes the script usable as an end-to-end test.
+status 1 if not), which makes the script usable as an end-to-end test. --log reads the
+parameters from a kincald recording instead of the network; --png saves the plot.
 
 The LCM types come from the generated Python package `kincal` (installed with kincal, or
 build/lcmgen/python in a build tree: --lcm-types). LCM's bindings: `pip install lcm`.
@@ -51,6 +53,8 @@ def main():
     ap.add_argument("--idle-timeout", type=float, default=0.0,
                     help="stop when no parameters arrive for S seconds after the first (0: never)")
     ap.add_argument("--until-converged", action="store_true", help="stop when the daemon reports convergence")
+    ap.add_argument("--log", default="", help="read a kincald LCM log instead of subscribing")
+    ap.add_argument("--png", default="", help="save the parameter plot (+-2 sigma) to this file at the end")
     ap.add_argument("--expect", action="append", default=[], metavar="NAME=VALUE",
                     help="at the end, require NAME within 3 sigma of VALUE")
     args = ap.parse_args()
@@ -68,7 +72,6 @@ def main():
         except ValueError:
             sys.exit(f"kincal_watch: --expect {e}: expected NAME=VALUE")
 
-    lc = lcm.LCM(args.url) if args.url else lcm.LCM()
     state = {"last": None, "history": [], "printed": 0.0, "received": 0, "last_rx": None}
 
     def on_params(_channel, data):
@@ -81,8 +84,9 @@ def main():
         state["received"] += 1
         state["last_rx"] = time.monotonic()
         state["history"].append((m.utime * 1e-6, list(m.values), list(m.sigmas)))
-        now = time.monotonic()
-        if now - state["printed"] >= 1.0:
+        # Live: a line per second of wall time; from a log: per 5 s of recorded time.
+        now = m.utime * 1e-6 if args.log else time.monotonic()
+        if now - state["printed"] >= (5.0 if args.log else 1.0):
             state["printed"] = now
             cells = "  ".join(f"{n} = {v:.6g} +- {s:.2g} {u}" for n, v, s, u in
                               zip(m.names, m.values, m.sigmas, m.units))
@@ -106,9 +110,22 @@ def main():
             print(f"model check: residuals suggest '{c.suspected_effect}' (confidence {c.confidence:.2f}): "
                   f"{c.evidence}", flush=True)
 
-    lc.subscribe(args.params_channel, on_params)
-    lc.subscribe(args.health_channel, on_health)
-    lc.subscribe(args.model_check_channel, on_check)
+    handlers = {args.params_channel: on_params, args.health_channel: on_health,
+                 args.model_check_channel: on_check}
+    if args.log:
+        try:
+            log = lcm.EventLog(args.log, "r")
+        except IOError as e:
+            sys.exit(f"kincal_watch: {args.log}: {e}")
+        state["printed"] = -1e18
+        for event in log:
+            h = handlers.get(event.channel)
+            if h is not None:
+                h(event.channel, event.data)
+        return finish(args, state, expect)
+    lc = lcm.LCM(args.url) if args.url else lcm.LCM()
+    for channel, h in handlers.items():
+        lc.subscribe(channel, h)
 
     fig = lines = None
     if args.plot:
@@ -133,6 +150,10 @@ def main():
         if fig is not None and m is not None and now - last_draw > 0.5:
             last_draw = now
             draw(fig, lines, m, state["history"])
+    return finish(args, state, expect)
+
+
+def finish(args, state, expect):
     m = state["last"]
     if m is None:
         print("kincal_watch: no parameters received", file=sys.stderr)
@@ -149,10 +170,19 @@ def main():
         print(f"{name}: {m.values[i]:.6g} +- {m.sigmas[i]:.2g} vs expected {value:.6g} ({z:+.1f} sigma) {verdict}")
         ok = ok and abs(z) <= 3
     print(f"kincal_watch: {state['received']} parameter messages, last status {STATUS.get(m.status, m.status)}")
+    if args.png:
+        import matplotlib
+        if not args.plot:
+            matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig = plt.figure(figsize=(9, 6))
+        draw(fig, {}, m, state["history"], interactive=False)
+        fig.savefig(args.png, dpi=110, bbox_inches="tight")
+        print(f"kincal_watch: wrote {args.png}")
     return 0 if ok else 1
 
 
-def draw(fig, lines, m, history):
+def draw(fig, lines, m, history, interactive=True):
     import matplotlib.pyplot as plt
     n = len(m.names)
     if not fig.axes or len(fig.axes) != n:
@@ -169,7 +199,8 @@ def draw(fig, lines, m, history):
         ax.set_ylabel(f"{m.names[i]} [{m.units[i]}]")
     fig.axes[-1].set_xlabel("time [s]")
     fig.suptitle(f"kincald: {m.model} ({m.estimator}), {m.update_count} updates, +-2 sigma")
-    plt.pause(0.001)
+    if interactive:
+        plt.pause(0.001)
 
 
 if __name__ == "__main__":

@@ -17,11 +17,11 @@ mkdir -p "$cache"
 cache=$(cd "$cache" && pwd)
 
 die() { echo "run_in_vm: $*" >&2; exit 2; }
-for tool in qemu-system-x86_64 busybox cpio depmod modprobe apt-get dpkg-deb; do
+for tool in qemu-system-x86_64 cpio depmod modprobe apt-get apt-cache dpkg-deb; do
   command -v "$tool" >/dev/null || die "missing $tool (scripts/setup installs qemu-system-x86 busybox-static cpio kmod)"
 done
-bb=$(command -v busybox)
-file -L "$bb" 2>/dev/null | grep -q "statically linked" || [ -x /bin/busybox ] || die "busybox must be static (busybox-static)"
+bb=/bin/busybox
+[ -x "$bb" ] && ! ldd "$bb" >/dev/null 2>&1 || die "needs a static /bin/busybox (package busybox-static)"
 
 # 1. The kernel: the package linux-image-amd64 depends on, unpacked, depmod'ed.
 if [ ! -f "$cache/kernel/ok" ]; then
