@@ -10,6 +10,7 @@
 
 #include "commands.h"
 #include "kincal/daemon/checkpoint.h"
+#include "kincal/daemon/lcm_guard.h"
 
 namespace kincal::app {
 
@@ -40,7 +41,9 @@ Command AddExport(CLI::App& app) {
       while (const lcm::LogEvent* ev = file.readNextEvent()) {
         if (ev->channel != a->channel) continue;
         kincal::params_t m;
-        if (m.decode(ev->data, 0, ev->datalen) < 0 || m.num_params < 0 ||
+        std::string why;
+        if (!daemon::PlausibleParams(ev->data, static_cast<size_t>(ev->datalen), 1000, &why) ||
+            m.decode(ev->data, 0, ev->datalen) < 0 || m.num_params < 0 ||
             m.covariance.size() != static_cast<size_t>(m.num_params)) {
           ++bad;
           continue;

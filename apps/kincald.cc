@@ -40,6 +40,7 @@ int main(int argc, char** argv) {
   CLI::App app{"kincald: online kinematic calibration daemon (capture -> markers -> pose -> SR-DD2 -> LCM)"};
   std::string config, device, libcamera, replay, record, lcm_url, resume, checkpoint;
   double speed = 1.0, duration = 0.0;
+  int loops = 1;
   bool fast = false, record_png = false, publish_frames = false, quiet = false, resume_if_present = false;
   app.add_option("-c,--config", config, "YAML config (default: the simulated robot, config/kincald_sim.yaml)");
   auto* dev = app.add_option("--device", device, "V4L2 device, e.g. /dev/video0 (source: v4l2)");
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   auto* sp = app.add_option("--speed", speed, "replay/simulation speed factor (1: real time)");
   auto* fa = app.add_flag("--fast", fast, "as fast as possible, nothing dropped, deterministic");
   sp->excludes(fa);
+  app.add_option("--loop", loops, "replay the log N times, each later by its span (soak tests)")->check(CLI::PositiveNumber);
   app.add_option("--record", record, "write everything (frames, controls, outputs) to this LCM log");
   app.add_flag("--record-png", record_png, "store recorded frames as PNG instead of raw");
   app.add_flag("--publish-frames", publish_frames, "also publish frames on LCM (default: log only)");
@@ -86,6 +88,7 @@ int main(int argc, char** argv) {
     if (cfg.source == "replay") cfg.replay.speed = fast ? 0.0 : (sp->count() ? speed : cfg.replay.speed);
     if (cfg.source == "sim") cfg.sim.speed = fast ? 0.0 : (sp->count() ? speed : cfg.sim.speed);
     if (duration > 0) cfg.sim.duration_s = duration;
+    if (loops > 1) cfg.replay.loops = loops;
     if (!record.empty()) cfg.record.path = record;
     if (record_png) cfg.record.frame_encoding = "png";
     if (publish_frames) cfg.lcm.publish_frames = true;

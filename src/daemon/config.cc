@@ -126,12 +126,16 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("carry_s", &c.sim.carry_s);
     s.Get("noise_grey", &c.sim.noise_grey);
     s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
+    s.Get("reflection_prob", &c.sim.reflection_prob);
+    s.Get("occlusion_prob", &c.sim.occlusion_prob);
+    s.Get("seed", &c.sim.seed);
     s.CheckUnknown();
   }
   {
     auto s = top.Sub("replay");
     s.Path("path", &c.replay.path, dir);
     s.Get("speed", &c.replay.speed);
+    s.Get("loops", &c.replay.loops);
     s.CheckUnknown();
   }
   {
@@ -188,6 +192,9 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("max_pose_gap_s", &c.filter.max_pose_gap_s);
     s.Get("params_rate_hz", &c.filter.params_rate_hz);
     s.Get("control_history_s", &c.filter.control_history_s);
+    s.Get("gate_nis", &c.filter.gate_nis);
+    s.Get("divergence_gated", &c.filter.divergence_gated);
+    s.Get("batch_window_s", &c.filter.batch_window_s);
     s.CheckUnknown();
   }
   {
@@ -244,6 +251,9 @@ void Validate(const DaemonConfig& c) {
     Require(!c.sim.scenario.empty(), "sim.scenario must name a scenario file");
     Require(c.sim.duration_s >= 0 && c.sim.margin_px >= 0 && c.sim.carry_s >= 0 && c.sim.noise_grey >= 0,
             "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0");
+    Require(c.sim.reflection_prob >= 0 && c.sim.reflection_prob <= 1 && c.sim.occlusion_prob >= 0 &&
+                c.sim.occlusion_prob <= 1,
+            "sim.reflection_prob and occlusion_prob must be in [0, 1]");
   }
   if (c.source == "sim" && c.sim.controls_via_lcm && c.sim.speed != 1.0) {
     Require(c.robot.control_stamp == "sender",
@@ -253,6 +263,7 @@ void Validate(const DaemonConfig& c) {
   if (c.source == "replay") {
     Require(!c.replay.path.empty(), "replay.path (or --replay FILE) must name an LCM log");
     Require(c.replay.speed >= 0, "replay.speed must be >= 0 (0: --fast)");
+    Require(c.replay.loops >= 1, "replay.loops must be >= 1");
   }
   Require(c.camera.nadir_height_m > 0, "camera.nadir_height_m must be > 0");
   Require(c.target.height_m >= 0 && (c.target.height_m < c.camera.nadir_height_m || !c.camera.floor.empty()),
@@ -285,6 +296,9 @@ void Validate(const DaemonConfig& c) {
   for (double v : c.filter.pose_psd) Require(v >= 0, "filter.pose_psd must be >= 0");
   Require(c.filter.max_pose_gap_s > 0 && c.filter.params_rate_hz >= 0 && c.filter.control_history_s > 0,
           "filter.max_pose_gap_s, control_history_s must be > 0, params_rate_hz >= 0");
+  Require(c.filter.gate_nis >= 0 && c.filter.divergence_gated >= 1, "filter.gate_nis >= 0, divergence_gated >= 1");
+  Require(c.filter.batch_window_s > 0 && c.filter.batch_window_s <= c.filter.control_history_s,
+          "filter.batch_window_s must be in (0, control_history_s]");
   Require(c.queues.frames >= 2 && c.queues.poses >= 2 && c.queues.controls >= 2 && c.queues.recorder >= 16,
           "queues: frames, poses, controls >= 2, recorder >= 16");
   Require(c.record.frame_encoding == "raw" || c.record.frame_encoding == "png", "record.frame_encoding must be raw or png");

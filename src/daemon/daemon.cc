@@ -22,10 +22,11 @@
 #include "kincal/analysis/model_check.h"
 #include "kincal/angles.h"
 #include "kincal/daemon/bounded_queue.h"
-#include "kincal/daemon/lcm_guard.h"
+#include "kincal/daemon/control_input.h"
 #include "kincal/daemon/pose_stage.h"
 #include "kincal/daemon/recorder.h"
 #include "kincal/daemon/sources.h"
+#include "kincal/estimation/batch.h"
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/scenario.h"
 #include "kincal/system.h"
@@ -73,6 +74,8 @@ class PoseRing {
   explicit PoseRing(size_t capacity) : items_(capacity) {}
   bool empty() const { return size_ == 0; }
   bool full() const { return size_ == items_.size(); }
+  size_t size() const { return size_; }
+  const PoseSample& at(size_t k) const { return items_[(head_ + k) % items_.size()]; }
   PoseSample& front() { return items_[head_]; }
   void push(const PoseSample& p) {
     items_[(head_ + size_) % items_.size()] = p;
@@ -113,11 +116,13 @@ struct Daemon::Impl {
   std::string source_error;
   std::mutex status_mu;  // guards source_error, estimate, latency
   std::string last_frame_error;
+  std::string last_reject;
 
   // Counters (atomics: written by one thread each, read by health).
   std::atomic<int64_t> frames_captured{0}, frame_errors{0}, poses_valid{0}, poses_invalid{0},
-      poses_stale{0}, poses_gated{0}, updates{0}, run_resets{0}, controls_received{0},
-      controls_rejected{0}, controls_out_of_order{0}, poses_published{0};
+      poses_gated{0}, updates{0}, run_resets{0}, controls_received{0},
+      controls_rejected{0}, controls_out_of_order{0}, poses_published{0}, frames_out_of_order{0},
+      controls_late{0}, filter_resets{0}, time_resets{0}, source_restarts{0}, discarded_at_reset{0};
   std::atomic<int64_t> last_frame_mono{0}, last_control_mono{0};
   LatencyHistogram latency_total, latency_window;
   Checkpoint estimate;
@@ -157,35 +162,14 @@ struct Daemon::Impl {
   // ---- controls -----------------------------------------------------------------------
   // Every control message, from LCM, the simulated robot or the log, comes through here.
   void OnControls(const void* data, size_t n, int64_t receive_utime) {
-    thread_local kincal::controls_t m;
     if (recorder) recorder->Write(cfg.lcm.controls_channel, receive_utime, data, n);
-    std::string why;
-    if (n > (1u << 20) || !PlausibleControls(data, n, kMaxControls, &why) ||
-        m.decode(data, 0, static_cast<int>(n)) < 0 || m.num_controls < 0 ||
-        m.num_controls > kMaxControls || m.model != sys.model().name()) {
-      controls_rejected.fetch_add(1);
-      return;
-    }
     ControlSample s;
-    s.receive_utime = receive_utime;
-    s.sender_utime = m.sender_utime;
-    s.utime = cfg.robot.control_stamp == "sender" ? m.sender_utime : receive_utime;
-    std::array<bool, kMaxControls> seen{};
-    for (int i = 0; i < m.num_controls; ++i) {
-      const int k = sys.model().ControlIndex(m.names[static_cast<size_t>(i)]);
-      const double v = m.values[static_cast<size_t>(i)];
-      if (k < 0 || !std::isfinite(v)) {
-        controls_rejected.fetch_add(1);
-        return;
-      }
-      s.values[static_cast<size_t>(k)] = v;
-      seen[static_cast<size_t>(k)] = true;
-    }
-    for (int k = 0; k < sys.num_controls(); ++k) {
-      if (!seen[static_cast<size_t>(k)]) {
-        controls_rejected.fetch_add(1);
-        return;
-      }
+    thread_local std::string why;
+    if (!DecodeControls(data, n, sys.model(), cfg.robot.control_stamp == "sender", receive_utime, &s, &why)) {
+      if (controls_rejected.fetch_add(1) == 0) spdlog::warn("rejected a control message: {}", why);
+      std::lock_guard lock(status_mu);
+      last_reject = why;
+      return;
     }
     controls_received.fetch_add(1);
     last_control_mono.store(MonotonicNs());
@@ -203,10 +187,14 @@ struct Daemon::Impl {
       if (st == SourceStatus::kEnd) break;
       if (st == SourceStatus::kTimeout) continue;
       if (st == SourceStatus::kError) {
-        std::lock_guard lock(status_mu);
-        source_error = error;
+        {
+          std::lock_guard lock(status_mu);
+          source_error = error;
+        }
         spdlog::error("source {}: {}", source->name(), error);
-        break;
+        if (cfg.source != "v4l2" && cfg.source != "libcamera") break;
+        if (!ReopenWithBackoff()) break;  // stopped while waiting
+        continue;
       }
       frames_captured.fetch_add(1);
       last_frame_mono.store(MonotonicNs());
@@ -242,6 +230,33 @@ struct Daemon::Impl {
       std::this_thread::sleep_for(std::chrono::milliseconds(200));  // let LCM deliver the last ones
       controls_done.store(true);
     }
+  }
+
+  // A live device failed: close it and open it again, waiting 0.25 s, 0.5 s, ... up to 5 s
+  // between attempts, until it is back or the daemon is stopped. Health says so meanwhile.
+  bool ReopenWithBackoff() {
+    double wait_s = 0.25;
+    while (!stop.load()) {
+      const TimeNs until = MonotonicNs() + SecondsToNs(wait_s);
+      while (!stop.load() && MonotonicNs() < until) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (stop.load()) return false;
+      std::string error;
+      if (source->Reopen(&error)) {
+        source_restarts.fetch_add(1);
+        {
+          std::lock_guard lock(status_mu);
+          source_error.clear();
+        }
+        spdlog::info("source {}: reopened, capturing again", source->name());
+        return true;
+      }
+      {
+        std::lock_guard lock(status_mu);
+        source_error = error + " (retrying every " + std::to_string(std::min(5.0, 2 * wait_s)).substr(0, 4) + " s)";
+      }
+      wait_s = std::min(5.0, 2 * wait_s);
+    }
+    return false;
   }
 
   // ---- detection / pose thread --------------------------------------------------------
@@ -306,13 +321,15 @@ struct Daemon::Impl {
     std::unique_ptr<OnlineCalibrator> cal;
     std::unique_ptr<ModelCheck> check;
     PoseRing pending(static_cast<size_t>(std::max(4 * cfg.queues.poses, 256)));
+    // Recent poses the filter used, for a batch re-fit when it diverges.
+    PoseRing recent(static_cast<size_t>(4096));
     PoseSample p;
     ControlSample c;
-    int64_t max_control_utime = INT64_MIN;
-    int64_t last_pose_utime = 0;
-    // "Long ago" without overflow in the differences below.
-    constexpr int64_t kLongAgo = std::numeric_limits<int64_t>::min() / 4;
-    int64_t last_params_utime = kLongAgo, last_check_utime = kLongAgo, last_checkpoint_utime = 0;
+    constexpr int64_t kNever = std::numeric_limits<int64_t>::min() / 4;  // no overflow in differences
+    int64_t max_control_utime = kNever;
+    int64_t last_pose_utime = kNever;
+    int64_t last_params_utime = kNever, last_check_utime = kNever, last_checkpoint_utime = 0;
+    int consecutive_gated = 0;
     kincal::params_t params_msg{};
     const int np = sys.num_params();
     // The prior: a checkpoint to resume from, or the configured guess.
@@ -335,19 +352,80 @@ struct Daemon::Impl {
     const int64_t params_every_us = cfg.filter.params_rate_hz > 0 ? static_cast<int64_t>(1e6 / cfg.filter.params_rate_hz) : 0;
     const int64_t check_every_us = static_cast<int64_t>(1e6 / cfg.health_rate_hz);
     const int64_t checkpoint_every_us = static_cast<int64_t>(cfg.checkpoint.every_s * 1e6);
+    const int64_t batch_window_us = static_cast<int64_t>(cfg.filter.batch_window_s * 1e6);
 
-    auto drain_controls = [&] {
-      while (control_q.TryPop(c)) {
-        if (!cal) {
-          cal = std::make_unique<OnlineCalibrator>(sys, opt, c.utime * 1000);
-          check = std::make_unique<ModelCheck>(sys);
-        }
-        if (!cal->AddControl(c.utime * 1000, std::span<const double>(c.values.data(), static_cast<size_t>(sys.num_controls())))) {
-          controls_out_of_order.fetch_add(1);
-          continue;
-        }
-        max_control_utime = std::max(max_control_utime, c.utime);
+    // A clock jumped back: start a new time base. Parameters and their covariance carry
+    // over as the prior; the control history and the pose are dropped. Events of the other
+    // stream still stamped on the old time base (later than the jump's new time by more
+    // than max_pose_gap_s) are discarded until that stream shows a new-base stamp.
+    int64_t horizon = kNever;  // kNever: no reset in progress
+    bool controls_rebased = true, poses_rebased = true;
+    auto reset_time_base = [&](const char* what, int64_t new_utime, bool by_controls) {
+      if (cal && cal->initialized()) {
+        prior.head(np) = cal->params().head(np);
+        prior_cov = cal->params_covariance();
       }
+      cal.reset();
+      check.reset();
+      max_control_utime = kNever;
+      last_pose_utime = kNever;
+      while (!recent.empty()) recent.pop();
+      horizon = new_utime + max_gap_us;
+      controls_rebased = by_controls;
+      poses_rebased = !by_controls;
+      time_resets.fetch_add(1);
+      spdlog::warn("{} jumped back by more than filter.max_pose_gap_s: new time base, parameters kept", what);
+    };
+    // True if the event belongs to a time base that was just left.
+    auto from_old_base = [&](int64_t utime, bool* rebased) {
+      if (horizon == kNever || *rebased) return false;
+      if (utime > horizon) {
+        discarded_at_reset.fetch_add(1);
+        return true;
+      }
+      *rebased = true;
+      if (controls_rebased && poses_rebased) horizon = kNever;
+      return false;
+    };
+    // A control stamped well before the newest one: the control clock jumped back. It is
+    // held (with the controls behind it) until the poses show the jump too, so that every
+    // pose of the old time base is used first whatever the threads' timing; if they do not
+    // (the pose stream ends, or live, a second passes), the controls alone start the new base.
+    std::optional<ControlSample> held_jump;
+    TimeNs held_since_mono = 0;
+    auto add_control = [&](const ControlSample& cs) {
+      if (!cal) {
+        cal = std::make_unique<OnlineCalibrator>(sys, opt, cs.utime * 1000);
+        check = std::make_unique<ModelCheck>(sys);
+      }
+      if (cal->initialized() && cs.utime * 1000 < cal->time_ns()) controls_late.fetch_add(1);
+      if (!cal->AddControl(cs.utime * 1000, std::span<const double>(cs.values.data(), static_cast<size_t>(sys.num_controls())))) {
+        controls_out_of_order.fetch_add(1);
+        return;
+      }
+      max_control_utime = std::max(max_control_utime, cs.utime);
+    };
+    auto drain_controls = [&] {
+      while (!held_jump && control_q.TryPop(c)) {
+        if (from_old_base(c.utime, &controls_rebased)) continue;
+        if (max_control_utime != kNever && c.utime < max_control_utime - max_gap_us) {
+          held_jump = c;
+          held_since_mono = MonotonicNs();
+          break;
+        }
+        add_control(c);
+      }
+    };
+    // Starts the new time base at a jump (seen in the poses at `utime`, or in the controls).
+    auto take_jump = [&](const char* what, int64_t utime, bool by_controls) {
+      reset_time_base(what, utime, by_controls);
+      if (held_jump) {
+        controls_rebased = true;
+        if (poses_rebased) horizon = kNever;
+        add_control(*held_jump);
+        held_jump.reset();
+      }
+      drain_controls();
     };
     auto publish_params = [&](int64_t utime, bool force) {
       if (!cal || !cal->initialized()) return;
@@ -378,9 +456,10 @@ struct Daemon::Impl {
       }
       params_msg.update_count = cal->update_count();
       const auto verdict = check->Verdict();
-      params_msg.status = verdict.window >= 100 && verdict.nis_mean > 10 * verdict.nis_expected
+      params_msg.status = (verdict.window >= 100 && verdict.nis_mean > 10 * verdict.nis_expected) || consecutive_gated > 0
                               ? kincal::params_t::STATUS_DIVERGED
                               : (converged ? kincal::params_t::STATUS_CONVERGED : kincal::params_t::STATUS_CONVERGING);
+      if (consecutive_gated > 0 && consecutive_gated < cfg.filter.divergence_gated) params_msg.status = kincal::params_t::STATUS_CONVERGING;
       Publish(cfg.lcm.params_channel, utime, params_msg);
       std::lock_guard lock(status_mu);
       estimate.model = std::string(sys.model().name());
@@ -393,26 +472,83 @@ struct Daemon::Impl {
       estimate.values = params_msg.values;
       estimate.covariance = C.topLeftCorner(np, np);
     };
+    // Divergence: the filter has rejected divergence_gated poses in a row. Re-fit the
+    // parameters by batch (robust loss) over the recent poses and controls, and start the
+    // filter again from that estimate (or from the prior if the fit fails).
+    auto recover = [&](const PoseSample& ps) {
+      std::vector<PoseMeasurement> meas;
+      int segment = 0;
+      int64_t prev = kNever;
+      for (size_t k = 0; k < recent.size(); ++k) {
+        const PoseSample& r = recent.at(k);
+        if (r.utime < ps.utime - batch_window_us) continue;
+        if (prev != kNever && r.utime - prev > max_gap_us) ++segment;
+        prev = r.utime;
+        meas.push_back({r.utime * 1000, r.xytheta, r.covariance, segment});
+      }
+      VecN<kMaxState> start = cal->params();
+      StateMat start_cov = prior_cov;
+      std::string how = "the configured prior";
+      if (meas.size() >= 10) {
+        BatchOptions bo;
+        bo.huber_scale = 2.0;
+        bo.max_iterations = 50;
+        bo.warmup_s = 0.0;
+        try {
+          const BatchResult br = FitBatch(sys, cal->controls(), meas, prior.head(np), bo);
+          if (br.params.allFinite() && br.covariance.rows() == np && br.covariance.allFinite()) {
+            start.head(np) = br.params;
+            start_cov = 4.0 * br.covariance;  // a margin: the window was short and had outliers
+            how = "a batch fit over " + std::to_string(meas.size()) + " poses";
+          }
+        } catch (const std::exception& e) {
+          spdlog::warn("batch re-fit failed: {}", e.what());
+        }
+      }
+      if (how == "the configured prior") start = prior;
+      auto fresh = std::make_unique<OnlineCalibrator>(sys, opt, cal->controls().origin_ns());
+      fresh->controls() = cal->controls();
+      fresh->Initialize(ps.utime * 1000, ps.xytheta, ps.covariance, start, start_cov);
+      cal = std::move(fresh);
+      check->Reset();
+      consecutive_gated = 0;
+      filter_resets.fetch_add(1);
+      spdlog::warn("filter diverged ({} poses in a row failed the innovation gate): restarted from {}",
+                   cfg.filter.divergence_gated, how);
+    };
     auto process = [&](const PoseSample& ps) {
       if (!ps.valid) return;
-      if (!cal || max_control_utime == INT64_MIN) return;  // no controls yet: nothing to propagate with
+      if (from_old_base(ps.utime, &poses_rebased)) return;
+      if (last_pose_utime != kNever && ps.utime < last_pose_utime - max_gap_us) {
+        take_jump(held_jump ? "the camera and control clocks" : "the camera clock", ps.utime, false);
+      }
+      if (!cal || max_control_utime == kNever) return;  // no controls yet: nothing to propagate with
       const TimeNs t = ps.utime * 1000;
       if (!cal->initialized()) {
+        // Start only where the controls in force are known (not before the first sample).
+        if (cal->controls().empty() || cal->controls().ToNs(cal->controls().TimeAt(0)) > t) return;
         cal->Initialize(t, ps.xytheta, ps.covariance, prior, prior_cov);
-      } else if (t <= cal->time_ns()) {
-        poses_stale.fetch_add(1);
+      } else if (ps.utime <= last_pose_utime || t <= cal->time_ns()) {
+        frames_out_of_order.fetch_add(1);  // repeated or earlier than the last: not used
         return;
       } else if (ps.utime - last_pose_utime > max_gap_us) {
         cal->ResetPose(t, ps.xytheta, ps.covariance);
         run_resets.fetch_add(1);
+        consecutive_gated = 0;
       } else {
-        const UpdateResult r = cal->AddPose(t, ps.xytheta, ps.covariance);
-        if (r.ok) {
+        const UpdateResult r = cal->AddPose(t, ps.xytheta, ps.covariance, cfg.filter.gate_nis);
+        if (r.gated) {
+          poses_gated.fetch_add(1);
+          if (++consecutive_gated >= cfg.filter.divergence_gated) recover(ps);
+        } else if (r.ok) {
+          consecutive_gated = 0;
           updates.fetch_add(1);
           check->Add(t, r, cal->state(), cal->controls());
         }
       }
       last_pose_utime = ps.utime;
+      if (recent.full()) recent.pop();
+      recent.push(ps);
       cal->controls().DiscardBefore(cal->controls().ToSeconds(t) - cfg.filter.control_history_s);
       publish_params(ps.utime, false);
       if (ps.utime - last_check_utime >= check_every_us) {
@@ -436,13 +572,20 @@ struct Daemon::Impl {
         pending.push(p);
       }
       const bool poses_over = !got && pose_q.closed_and_empty();
-      const bool no_more_controls = controls_done.load() && control_q.size() == 0;
+      const bool no_more_controls = controls_done.load() && control_q.size() == 0 && !held_jump;
       if (no_more_controls) drain_controls();
+      // The controls jumped back and the poses did not follow: the controls alone start
+      // the new time base (live after a second; lossless when the poses have ended).
+      if (held_jump && pending.empty() &&
+          (poses_over || (!lossless && MonotonicNs() - held_since_mono > kNsPerSecond))) {
+        take_jump("the control clock", held_jump->utime, true);
+      }
       // A pose is processed once the controls up to its time are in, or the controls
       // stream has ended, or (live) it has waited max_control_delay_s.
       while (!pending.empty()) {
         const PoseSample& f = pending.front();
-        const bool controls_in = max_control_utime >= f.utime;
+        // Controls jumped back: no more controls will come on the old time base.
+        const bool controls_in = max_control_utime >= f.utime || held_jump.has_value();
         const bool waited = !lossless && MonotonicNs() - f.arrival_mono_ns > max_delay_ns;
         if (!(controls_in || no_more_controls || (poses_over && stop.load()) || waited)) break;
         process(f);
@@ -515,7 +658,7 @@ struct Daemon::Impl {
   void PublishHealth(double period_s, DaemonCounters* prev) {
     const DaemonCounters now = Counters();
     kincal::health_t h{};
-    h.schema_version = 1;
+    h.schema_version = 2;
     h.utime = Now();
     h.source = source->name();
     h.frame_rate_hz = static_cast<double>(now.frames_captured - prev->frames_captured) / period_s;
@@ -525,6 +668,15 @@ struct Daemon::Impl {
     h.poses_published = poses_published.load();
     h.controls_received = now.controls_received;
     h.messages_rejected = now.controls_rejected;
+    h.frames_bad = now.frame_errors;
+    h.frames_out_of_order = now.frames_out_of_order;
+    h.controls_out_of_order = now.controls_out_of_order;
+    h.controls_late = now.controls_late;
+    h.poses_gated = now.poses_gated;
+    h.filter_resets = now.filter_resets;
+    h.time_resets = now.time_resets;
+    h.discarded_at_reset = now.discarded_at_reset;
+    h.source_restarts = now.source_restarts;
     h.log_events_written = now.log_events_written;
     h.log_events_lost = now.log_events_lost;
     {
@@ -545,7 +697,13 @@ struct Daemon::Impl {
     if (now.frames_dropped_queue > prev->frames_dropped_queue) add("frame queue full: detection is too slow");
     if (now.frames_dropped_device > prev->frames_dropped_device) add("the device dropped frames");
     if (now.log_events_lost > prev->log_events_lost) add("log events lost");
-    if (now.controls_rejected > prev->controls_rejected) add("rejected control messages");
+    if (now.filter_resets > prev->filter_resets) add("filter diverged and was restarted from a batch fit");
+    if (now.time_resets > prev->time_resets) add("a clock jumped back: new time base");
+    if (now.frames_out_of_order > prev->frames_out_of_order) add("frames with repeated or earlier timestamps");
+    if (now.controls_rejected > prev->controls_rejected) {
+      std::lock_guard lock(status_mu);
+      add("rejected control messages (last: " + last_reject + ")");
+    }
     if (!cfg.record.path.empty() && recorder && !recorder->error().empty()) add(recorder->error());
     if (subscribes() && now.controls_received == 0 && now.frames_captured > 0) {
       add("no controls received on " + cfg.lcm.controls_channel);
@@ -566,7 +724,12 @@ struct Daemon::Impl {
     d.poses_valid = poses_valid.load();
     d.poses_invalid = poses_invalid.load();
     d.poses_dropped_queue = pose_q.dropped();
-    d.poses_stale = poses_stale.load();
+    d.frames_out_of_order = frames_out_of_order.load();
+    d.controls_late = controls_late.load();
+    d.filter_resets = filter_resets.load();
+    d.time_resets = time_resets.load();
+    d.discarded_at_reset = discarded_at_reset.load();
+    d.source_restarts = source_restarts.load();
     d.poses_gated = poses_gated.load();
     d.updates = updates.load();
     d.run_resets = run_resets.load();
@@ -617,7 +780,9 @@ Daemon::Daemon(DaemonConfig config) {
     d.lcm->subscribeFunction(
         cfg.lcm.controls_channel,
         +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Impl* self) {
-          self->OnControls(rbuf->data, rbuf->data_size, rbuf->recv_utime);
+          // Receive stamp on the pipeline's time base (monotonic, mapped once): an NTP step of
+          // the realtime clock does not make controls jump against frames.
+          self->OnControls(rbuf->data, rbuf->data_size, MonotonicToUtime(MonotonicNs()));
         },
         &d);
   }
@@ -684,10 +849,12 @@ int Daemon::Run() {
   if (d.recorder) d.recorder->Close();
   const DaemonCounters c = counters();
   spdlog::info(
-      "kincald: {} frames ({} dropped by the device, {} by the queue, {} bad), {} valid poses, {} updates, {} runs, "
-      "{} controls ({} rejected, {} out of order), log {} written / {} lost, latency p50 {:.3f} ms p99 {:.3f} ms",
-      c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frame_errors, c.poses_valid, c.updates,
-      c.run_resets + (c.updates > 0 ? 1 : 0), c.controls_received, c.controls_rejected, c.controls_out_of_order,
+      "kincald: {} frames ({} dropped by the device, {} by the queue, {} bad, {} out of order), {} valid poses, "
+      "{} updates, {} gated, {} runs, {} filter resets, {} time resets, {} source restarts; {} controls ({} rejected, "
+      "{} out of order, {} late); log {} written / {} lost; latency p50 {:.3f} ms p99 {:.3f} ms",
+      c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frame_errors, c.frames_out_of_order,
+      c.poses_valid, c.updates, c.poses_gated, c.run_resets + (c.updates > 0 ? 1 : 0), c.filter_resets, c.time_resets,
+      c.source_restarts, c.controls_received, c.controls_rejected, c.controls_out_of_order, c.controls_late,
       c.log_events_written, c.log_events_lost, c.latency_p50_ms, c.latency_p99_ms);
   std::lock_guard lock(d.status_mu);
   return d.source_error.empty() ? 0 : 1;

@@ -57,6 +57,28 @@ bool PlausibleControls(const void* data, size_t n, int max_controls, std::string
   return true;
 }
 
+bool PlausibleParams(const void* data, size_t n, int max_params, std::string* why) {
+  Reader r(data, n);
+  int64_t count = 0;
+  // hash, schema_version, utime, model, estimator, num_params
+  if (!r.Skip(8 + 4 + 8) || !r.String() || !r.String() || !r.Int32(&count)) {
+    *why = "truncated kincal.params_t header";
+    return false;
+  }
+  if (count < 0 || count > max_params) {
+    *why = "num_params " + std::to_string(count) + " outside [0, " + std::to_string(max_params) + "]";
+    return false;
+  }
+  // each parameter: name and unit (>= 5 bytes each), value and sigma (8 each), a row of
+  // the covariance (8 * count)
+  const size_t need = static_cast<size_t>(count) * (5 + 5 + 8 + 8 + 8 * static_cast<size_t>(count));
+  if (need > r.remaining()) {
+    *why = "num_params " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
+    return false;
+  }
+  return true;
+}
+
 bool PlausibleFrame(const void* data, size_t n, std::string* why) {
   Reader r(data, n);
   int64_t size = 0;

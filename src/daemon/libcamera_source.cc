@@ -129,6 +129,21 @@ class LibcameraSource final : public FrameSource {
     cv_.notify_all();
   }
   int64_t device_drops() const override { return drops_; }
+  bool Reopen(std::string* error) override {
+    Close();
+    {
+      std::lock_guard lock(mu_);
+      done_.clear();
+    }
+    have_seq_ = false;
+    try {
+      Start();
+      return true;
+    } catch (const SourceError& e) {
+      *error = e.what();
+      return false;
+    }
+  }
 
  private:
   void OnComplete(lc::Request* r) {

@@ -32,17 +32,30 @@ class ReplaySource final : public FrameSource {
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* error) override {
     while (!stopped_) {
       lcm_eventlog_event_t* ev = lcm_eventlog_read_next_event(log_);
-      if (ev == nullptr) return SourceStatus::kEnd;
+      if (ev == nullptr) {
+        // End of the log: again, shifted later by its span plus one nominal frame period,
+        // so that time keeps increasing.
+        if (++loop_ >= cfg_.replay.loops || last_utime_ == INT64_MIN) return SourceStatus::kEnd;
+        offset_ += last_utime_ - first_utime_ + 33'333;
+        lcm_eventlog_destroy(log_);
+        log_ = lcm_eventlog_create(cfg_.replay.path.c_str(), "r");
+        if (log_ == nullptr) {
+          *error = cfg_.replay.path + ": cannot reopen for the next loop";
+          return SourceStatus::kError;
+        }
+        continue;
+      }
       struct Free {
         lcm_eventlog_event_t* e;
         ~Free() { lcm_eventlog_free_event(e); }
       } guard{ev};
       ++events_;
       if (first_utime_ == INT64_MIN) first_utime_ = ev->timestamp;
-      if (cfg_.replay.speed > 0) Pace(ev->timestamp);
+      if (loop_ == 0) last_utime_ = std::max(last_utime_, ev->timestamp);
+      if (cfg_.replay.speed > 0) Pace(ev->timestamp + offset_);
       const std::string_view channel(ev->channel, static_cast<size_t>(ev->channellen));
       if (channel == cfg_.lcm.controls_channel) {
-        intake_(ev->data, static_cast<size_t>(ev->datalen), ev->timestamp);
+        intake_(ev->data, static_cast<size_t>(ev->datalen), ev->timestamp + offset_);
         continue;
       }
       if (channel != cfg_.lcm.frame_channel) {
@@ -68,8 +81,8 @@ class ReplaySource final : public FrameSource {
       f->stride = msg_.stride;
       f->data.resize(msg_.data.size());
       std::memcpy(f->data.data(), msg_.data.data(), msg_.data.size());
-      f->utime = msg_.utime;
-      f->device_utime = msg_.device_utime;
+      f->utime = msg_.utime + offset_;
+      f->device_utime = msg_.device_utime + offset_;
       f->sequence = msg_.sequence;
       f->arrival_mono_ns = MonotonicNs();
       return SourceStatus::kFrame;
@@ -91,7 +104,8 @@ class ReplaySource final : public FrameSource {
   lcm_eventlog_t* log_ = nullptr;
   kincal::frame_t msg_;
   TimeNs start_mono_ = 0;
-  int64_t first_utime_ = INT64_MIN;
+  int64_t first_utime_ = INT64_MIN, last_utime_ = INT64_MIN, offset_ = 0;
+  int loop_ = 0;
   int64_t events_ = 0, skipped_ = 0, bad_frames_ = 0;
   std::atomic<bool> stopped_{false};
 };

@@ -12,6 +12,8 @@
 #include "kincal/simulator.h"
 #include "kincal/vision/target.h"
 
+#include <opencv2/imgproc.hpp>
+
 namespace kincal::daemon {
 namespace {
 
@@ -24,7 +26,8 @@ class SimSource final : public FrameSource {
         truth_(MakeSystem(sc_.model, sc_.hidden_effects)),
         intake_(std::move(controls)),
         publish_(std::move(publish)),
-        rng_(sc_.seed) {
+        rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
+        fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
     if (sc_.model != c.robot.model) {
       throw SourceError(c.sim.scenario + ": scenario model '" + sc_.model + "' differs from robot.model '" +
                         c.robot.model + "' in " + (c.file.empty() ? "the config" : c.file));
@@ -101,7 +104,9 @@ class SimSource final : public FrameSource {
     }
     cv::Mat image;
     if (in_view) {
-      image = vision::RenderTarget(vis_.camera, pose, vis_.layout, render_, rng_).image;
+      auto rendered = vision::RenderTarget(vis_.camera, pose, vis_.layout, render_, rng_);
+      image = rendered.image;
+      AddFaults(pose, rendered.centres, &image);
     } else {
       image.create(vis_.camera.height, vis_.camera.width, CV_8UC1);
       cv::randn(image, render_.background, render_.noise_sigma);
@@ -117,6 +122,25 @@ class SimSource final : public FrameSource {
 
  private:
   double Heading() { return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_); }
+
+  // Measurement faults: a reflection that looks like a marker somewhere near the target,
+  // or a marker hidden behind something (the wrong number of markers).
+  void AddFaults(const vision::Pose3& pose, const std::vector<Eigen::Vector2d>& centres, cv::Mat* image) {
+    std::uniform_real_distribution<double> u01(0.0, 1.0);
+    const double r_px = vis_.camera.fx * vis_.layout.marker_radius_m / pose.t.z();
+    if (cfg_.sim.reflection_prob > 0 && u01(fault_rng_) < cfg_.sim.reflection_prob) {
+      // Within about one plate size of the target: inside the tracker's search region.
+      const double reach = 2.0 * vis_.camera.fx * vis_.layout.plate_size_m.maxCoeff() / pose.t.z();
+      const Eigen::Vector2d c = centres.front() + Eigen::Vector2d(u01(fault_rng_) - 0.5, u01(fault_rng_) - 0.5) * reach;
+      cv::circle(*image, cv::Point(static_cast<int>(c.x() * 16), static_cast<int>(c.y() * 16)),
+                 static_cast<int>(r_px * 16), cv::Scalar(render_.foreground), cv::FILLED, cv::LINE_AA, 4);
+    }
+    if (cfg_.sim.occlusion_prob > 0 && u01(fault_rng_) < cfg_.sim.occlusion_prob) {
+      const auto& c = centres[static_cast<size_t>(u01(fault_rng_) * static_cast<double>(centres.size())) % centres.size()];
+      cv::circle(*image, cv::Point(static_cast<int>(c.x()), static_cast<int>(c.y())), static_cast<int>(2 * r_px + 2),
+                 cv::Scalar(render_.background), cv::FILLED);
+    }
+  }
 
   bool InView(const vision::Pose3& pose) const {
     const double m = cfg_.sim.margin_px;
@@ -148,6 +172,7 @@ class SimSource final : public FrameSource {
   ControlIntake intake_;
   NetworkPublish publish_;
   std::mt19937_64 rng_;
+  std::mt19937_64 fault_rng_;  // its own stream: faults do not change the rest of the simulation
   VecN<kMaxState> p_true_;
   ControlSignal cmd_;
   std::vector<TimeNs> times_;

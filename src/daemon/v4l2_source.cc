@@ -179,6 +179,17 @@ class V4l2Source final : public FrameSource {
   // Called from another thread: the capture thread closes the device on its next Next().
   void Stop() override { stop_.store(true); }
   int64_t device_drops() const override { return drops_; }
+  bool Reopen(std::string* error) override {
+    Close();
+    have_seq_ = false;
+    try {
+      Start();
+      return true;
+    } catch (const SourceError& e) {
+      *error = e.what();
+      return false;
+    }
+  }
 
  private:
   [[noreturn]] void Fail(const std::string& what) {

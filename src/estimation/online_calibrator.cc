@@ -127,13 +127,33 @@ void OnlineCalibrator::PredictTo(TimeNs t_ns) {
 }
 
 UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
-                                       const Eigen::Matrix3d& R) {
+                                       const Eigen::Matrix3d& R, double gate_nis) {
   if (!initialized_ || t_ns < t_ns_) {
     UpdateResult r;
     r.ok = false;
     return r;
   }
   PredictTo(t_ns);
+  if (gate_nis > 0.0) {
+    const StateVec& x = filter_->mean();
+    MeasVec zp(3);
+    meas_.Eval(x.data(), zp.data());
+    MeasVec nu = z - zp;
+    nu[2] = WrapAngle(nu[2]);
+    MeasStateMat H;
+    meas_.Jacobian(x, &H);
+    const Eigen::Matrix3d S = (H * filter_->covariance() * H.transpose()).topLeftCorner<3, 3>() + R;
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(S);
+    const double nis = nu.head<3>().dot(ldlt.solve(Eigen::Vector3d(nu.head<3>())));
+    if (!(nis <= gate_nis)) {
+      UpdateResult r;
+      r.ok = false;
+      r.gated = true;
+      r.nis = nis;
+      r.innovation = nu;
+      return r;
+    }
+  }
   Eigen::LLT<Eigen::Matrix3d> llt(R);
   const MeasMat Sw = llt.matrixL().toDenseMatrix();
   const MeasVec zv = z;

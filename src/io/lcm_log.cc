@@ -7,6 +7,7 @@
 #include <sys/stat.h>
 
 #include "kincal/angles.h"
+#include "kincal/daemon/lcm_guard.h"
 #include "kincal/io/recording.h"
 
 namespace kincal {
@@ -32,6 +33,10 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
     const std::string where = path + ": event " + std::to_string(ev->eventnum);
     if (ev->channel == controls_channel) {
       kincal::controls_t m;
+      std::string why;
+      if (!daemon::PlausibleControls(ev->data, static_cast<size_t>(ev->datalen), kMaxControls, &why)) {
+        throw RecordingError(where + " on " + ev->channel + ": " + why);
+      }
       if (m.decode(ev->data, 0, ev->datalen) < 0) {
         throw RecordingError(where + " on " + ev->channel + ": not a kincal.controls_t");
       }

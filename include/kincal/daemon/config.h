@@ -52,11 +52,17 @@ struct SimOptions {
   // false: the simulated robot hands its controls to the filter directly (and publishes
   // them); true: they reach the filter only through LCM, like a real robot's.
   bool controls_via_lcm = false;
+  // Measurement faults, per frame: a marker-like reflection near the target, one marker
+  // hidden (a wrong marker count).
+  double reflection_prob = 0.0;
+  double occlusion_prob = 0.0;
+  uint64_t seed = 0;  // 0: the scenario's seed
 };
 
 struct ReplayOptions {
   std::string path;
   double speed = 1.0;  // 0: --fast (as fast as possible, nothing dropped, deterministic)
+  int loops = 1;       // play the log this many times, each later by the log's span (soak tests)
 };
 
 struct CameraOptions {
@@ -92,6 +98,9 @@ struct FilterOptions {
   double max_pose_gap_s = 1.0;   // a longer gap starts a new run (pose reset)
   double params_rate_hz = 10.0;  // params_t publish rate (0: every update)
   double control_history_s = 10.0;  // control samples kept behind the filter
+  double gate_nis = 16.27;       // innovation gate (chi^2, 3 dof, 99.9 %); 0: off
+  int divergence_gated = 10;     // this many gated poses in a row: diverged, re-fit by batch
+  double batch_window_s = 8.0;   // poses (and controls) the re-fit uses; <= control_history_s
 };
 
 struct QueueOptions {

@@ -27,8 +27,13 @@ struct DaemonCounters {
   int64_t poses_valid = 0;
   int64_t poses_invalid = 0;
   int64_t poses_dropped_queue = 0;
-  int64_t poses_stale = 0;          // older than the filter's time: not used
+  int64_t frames_out_of_order = 0;  // pose time repeated or earlier than the last: not used
   int64_t poses_gated = 0;          // innovation too large: not used
+  int64_t filter_resets = 0;        // divergence: restarted from a batch fit
+  int64_t time_resets = 0;          // a clock jumped back: new time base
+  int64_t discarded_at_reset = 0;   // poses/controls still on the old time base after one
+  int64_t source_restarts = 0;      // the device failed and was reopened
+  int64_t controls_late = 0;        // older than the filter's time
   int64_t updates = 0;
   int64_t run_resets = 0;
   int64_t controls_received = 0;

@@ -90,6 +90,12 @@ class FrameSource {
   // Fills *f (reusing its buffer) or times out after timeout_ms.
   virtual SourceStatus Next(Frame* f, int timeout_ms, std::string* error) = 0;
   virtual void Stop() = 0;
+  // After an error: close and open the device again. False (with *error) if it is still
+  // not there; sources that cannot reopen return false.
+  virtual bool Reopen(std::string* error) {
+    *error = name() + " cannot be reopened";
+    return false;
+  }
   // Frames the device itself lost (sequence gaps).
   virtual int64_t device_drops() const { return 0; }
   // Input the source could not use (undecodable log events).

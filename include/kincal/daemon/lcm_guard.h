@@ -12,6 +12,8 @@ namespace kincal::daemon {
 
 // kincal.controls_t: at most `max_controls` entries that fit in `n` bytes.
 bool PlausibleControls(const void* data, size_t n, int max_controls, std::string* why);
+// kincal.params_t: at most `max_params` parameters whose arrays fit in `n` bytes.
+bool PlausibleParams(const void* data, size_t n, int max_params, std::string* why);
 // kincal.frame_t: `size` equal to the bytes that remain.
 bool PlausibleFrame(const void* data, size_t n, std::string* why);
 

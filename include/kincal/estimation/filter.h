@@ -51,6 +51,7 @@ struct UpdateResult {
   MeasMat innovation_cov;  // predicted measurement covariance incl. noise
   double nis = 0.0;        // innovation^T cov^-1 innovation
   bool ok = true;          // false if the innovation covariance was not positive definite
+  bool gated = false;      // the measurement failed the innovation gate and was not used
 };
 
 class Filter {

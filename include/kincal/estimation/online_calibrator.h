@@ -95,8 +95,11 @@ class OnlineCalibrator {
   bool initialized() const { return initialized_; }
 
   // Predicts to t and updates with the measured target pose z (x, y, theta) of covariance R.
-  // Poses older than the current belief are rejected (ok = false).
-  UpdateResult AddPose(TimeNs t_ns, const Eigen::Vector3d& z, const Eigen::Matrix3d& R);
+  // Poses older than the current belief are rejected (ok = false). With gate_nis > 0, a
+  // pose whose normalised innovation squared before the update (linearised at the
+  // predicted mean) exceeds gate_nis is not used: ok = false, gated = true, nis set.
+  UpdateResult AddPose(TimeNs t_ns, const Eigen::Vector3d& z, const Eigen::Matrix3d& R,
+                       double gate_nis = 0.0);
   // Predicts to t without a measurement.
   void PredictTo(TimeNs t_ns);
   // Starts a new run at time t: pose := z (cov R), parameters and their covariance kept.

@@ -1,0 +1,62 @@
+// Decoding and checking of incoming control messages.
+#include "kincal/daemon/control_input.h"
+
+#include <kincal/controls_t.hpp>
+
+#include <cmath>
+
+#include "kincal/daemon/lcm_guard.h"
+
+namespace kincal::daemon {
+
+bool DecodeControls(const void* data, size_t n, const KinematicModel& model, bool use_sender_stamp,
+                    int64_t receive_utime, ControlSample* out, std::string* why) {
+  thread_local kincal::controls_t m;
+  if (n > (1u << 16)) {
+    *why = "message of " + std::to_string(n) + " bytes is too large for kincal.controls_t";
+    return false;
+  }
+  if (!PlausibleControls(data, n, kMaxControls, why)) return false;
+  if (m.decode(data, 0, static_cast<int>(n)) < 0) {
+    *why = "not a kincal.controls_t";
+    return false;
+  }
+  if (m.model != model.name()) {
+    *why = "controls for model '" + m.model + "', expected '" + std::string(model.name()) + "'";
+    return false;
+  }
+  if (use_sender_stamp && m.sender_utime <= 0) {
+    *why = "no sender_utime, but robot.control_stamp is sender";
+    return false;
+  }
+  ControlSample s;
+  s.receive_utime = receive_utime;
+  s.sender_utime = m.sender_utime;
+  s.utime = use_sender_stamp ? m.sender_utime : receive_utime;
+  std::array<bool, kMaxControls> seen{};
+  for (int i = 0; i < m.num_controls; ++i) {
+    const std::string& name = m.names[static_cast<size_t>(i)];
+    const int k = model.ControlIndex(name);
+    if (k < 0) {
+      *why = "'" + name + "' is not a control of model '" + std::string(model.name()) + "'";
+      return false;
+    }
+    const double v = m.values[static_cast<size_t>(i)];
+    if (!std::isfinite(v)) {
+      *why = "control '" + name + "' is not finite";
+      return false;
+    }
+    s.values[static_cast<size_t>(k)] = v;
+    seen[static_cast<size_t>(k)] = true;
+  }
+  for (int k = 0; k < model.num_controls(); ++k) {
+    if (!seen[static_cast<size_t>(k)]) {
+      *why = "control '" + model.controls()[static_cast<size_t>(k)].name + "' missing";
+      return false;
+    }
+  }
+  *out = s;
+  return true;
+}
+
+}  // namespace kincal::daemon
