@@ -277,3 +277,83 @@ TEST(VmV4l2, LibcameraFindsNoCameraOnVivid) {
 
 }  // namespace
 }  // namespace kincal::daemon
+
+namespace kincal::daemon {
+namespace {
+
+// The device disappears mid-stream (the driver is unbound from the device, as when a USB
+// camera is pulled, then the module is unloaded and loaded again): the daemon reports it,
+// retries with backoff and captures again when the device is back; it never exits on its own.
+TEST(VmV4l2, TheDeviceDisappearsAndComesBack) {
+  ASSERT_NE(std::getenv("KINCAL_IN_VM"), nullptr);
+  const char* modules = std::getenv("KINCAL_VM_MODULES");
+  const char* params = std::getenv("KINCAL_VIVID_PARAMS");
+  ASSERT_NE(modules, nullptr);
+  ASSERT_NE(params, nullptr);
+  const std::string cap = FindNode("vid-cap");
+  ASSERT_FALSE(cap.empty());
+  v4l2_format fmt{};
+  {
+    const int fd = open(cap.c_str(), O_RDWR);
+    ASSERT_GE(fd, 0);
+    fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    ASSERT_EQ(ioctl(fd, VIDIOC_G_FMT, &fmt), 0);
+    close(fd);
+  }
+  DaemonConfig cfg = VividConfig(cap);
+  cfg.v4l2.controls.clear();
+  cfg.v4l2.width = static_cast<int>(fmt.fmt.pix.width);  // the driver's default, also after a reload
+  cfg.v4l2.height = static_cast<int>(fmt.fmt.pix.height);
+  cfg.lcm.url = "memq://";
+  cfg.camera.intrinsics = std::string(std::getenv("TMPDIR")) + "/vivid_cam.yaml";
+  vision::CameraModel cam;
+  cam.width = cfg.v4l2.width;
+  cam.height = cfg.v4l2.height;
+  cam.fx = cam.fy = 500;
+  cam.cx = cam.width / 2.0;
+  cam.cy = cam.height / 2.0;
+  vision::WriteCameraYaml(cam, cfg.camera.intrinsics);
+  Daemon d(cfg);
+  int rc = -1;
+  std::thread runner([&] { rc = d.Run(); });
+  struct Join {  // stop and join even when an assertion returns early
+    Daemon& d;
+    std::thread& t;
+    ~Join() {
+      d.Stop();
+      if (t.joinable()) t.join();
+    }
+  } join{d, runner};
+  auto wait_for = [&](auto pred, double seconds) {
+    const auto until = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+    while (true) {
+      if (pred()) return true;  // evaluated once per round: pred may act (rmmod)
+      if (std::chrono::steady_clock::now() >= until) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  };
+  ASSERT_TRUE(wait_for([&] { return d.counters().frames_captured > 10; }, 20));
+  {
+    std::ofstream unbind("/sys/bus/platform/drivers/vivid/unbind");
+    unbind << "vivid.0";
+    ASSERT_TRUE(unbind.good()) << "cannot unbind vivid.0";
+  }
+  std::this_thread::sleep_for(std::chrono::seconds(1));
+  const int64_t frames_before = d.counters().frames_captured;
+  // The daemon must have let go of the device for the module to unload.
+  EXPECT_TRUE(wait_for([] { return std::system("/usr/sbin/rmmod vivid") == 0; }, 10)) << "vivid still in use";
+  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+  EXPECT_EQ(d.counters().frames_captured, frames_before) << "frames without a device";
+  const std::string insmod = std::string("/usr/sbin/insmod ") + modules + "/vivid.ko " + params;
+  ASSERT_EQ(std::system(insmod.c_str()), 0) << insmod;
+  EXPECT_TRUE(wait_for([&] { return d.counters().source_restarts >= 1; }, 15)) << "never reopened";
+  EXPECT_TRUE(wait_for([&] { return d.counters().frames_captured > frames_before + 10; }, 15)) << "no frames after";
+  d.Stop();
+  runner.join();
+  EXPECT_EQ(rc, 0) << "the device is back: the run ends cleanly";
+  std::cout << "device fault: " << frames_before << " frames before, " << d.counters().frames_captured
+            << " at the end, " << d.counters().source_restarts << " reopen(s)\n";
+}
+
+}  // namespace
+}  // namespace kincal::daemon

@@ -68,7 +68,7 @@ mount --bind /dev /host/dev; mount -t proc proc /host/proc; mount -t sysfs sys /
 mount -t tmpfs tmp /host/run
 cp /mods/*.ko /host/run/ 2>/dev/null
 echo "run_in_vm: booted, running: \$(cat /cmd)"
-chroot /host /bin/sh -c "export TMPDIR=/run KINCAL_IN_VM=1 KINCAL_VM_MODULES=/run; cd \$(cat /cwd) && \$(cat /cmd)"
+chroot /host /bin/sh -c "export TMPDIR=/run KINCAL_IN_VM=1 KINCAL_VM_MODULES=/run KINCAL_VIVID_PARAMS='$vivid_params'; cd \$(cat /cwd) && \$(cat /cmd)"
 echo "KINCAL_VM_EXIT=\$?"
 poweroff -f
 INIT
