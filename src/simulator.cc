@@ -126,7 +126,10 @@ std::vector<PoseMeasurement> MeasurePoses(std::span<const TrajectoryPoint> truth
   std::vector<PoseMeasurement> out;
   out.reserve(truth.size());
   for (const auto& p : truth) {
-    Eigen::Vector3d n(gauss(rng), gauss(rng), gauss(rng));
+    // Drawn in a fixed sequence (the order in which constructor arguments are evaluated is
+    // unspecified): last component first, the order GCC used, so earlier results stand.
+    Eigen::Vector3d n;
+    for (int i = 2; i >= 0; --i) n[i] = gauss(rng);
     PoseMeasurement m;
     m.t_ns = p.t_ns;
     m.z = p.target + L * n;

@@ -119,7 +119,9 @@ Design MakeDesign(const System& truth, const Eigen::Vector3d& params, const Thes
   for (int k = 0; k < o.runs; ++k) {
     Run& run = d.runs[static_cast<size_t>(k)];
     const auto times = FrameTimes(run.t0, run.t1, o.timing, rng);
-    run.start_pose = Eigen::Vector3d(pos(rng), pos(rng), ang(rng));
+    // In a fixed sequence (argument order is unspecified): heading, y, x, as GCC evaluated it.
+    const double sth = ang(rng), sy = pos(rng), sx = pos(rng);
+    run.start_pose = Eigen::Vector3d(sx, sy, sth);
     VecN<kMaxState> p = params;
     const StateVec x0 = truth.MakeState(run.start_pose.x(), run.start_pose.y(), run.start_pose.z(),
                                         p, d.controls, d.controls.ToSeconds(run.t0));

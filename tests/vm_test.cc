@@ -47,7 +47,14 @@ std::string FindNode(const std::string& suffix) {
 }
 
 void SetTimings640x480(int fd) {
+  // The kernel header's initialiser mixes designated and positional fields.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmissing-field-initializers"
+#if defined(__clang__)
+#pragma clang diagnostic ignored "-Wc99-designator"
+#endif
   v4l2_dv_timings t = V4L2_DV_BT_DMT_640X480P60;
+#pragma GCC diagnostic pop
   ASSERT_EQ(ioctl(fd, VIDIOC_S_DV_TIMINGS, &t), 0) << std::strerror(errno);
 }
 

@@ -17,8 +17,13 @@ bool DecodeControls(const void* data, size_t n, const KinematicModel& model, boo
     return false;
   }
   if (!PlausibleControls(data, n, kMaxControls, why)) return false;
-  if (m.decode(data, 0, static_cast<int>(n)) < 0) {
-    *why = "not a kincal.controls_t";
+  try {
+    if (m.decode(data, 0, static_cast<int>(n)) < 0) {
+      *why = "not a kincal.controls_t";
+      return false;
+    }
+  } catch (const std::exception& e) {  // lcm-gen's decoder on input the checks above missed
+    *why = std::string("not a kincal.controls_t (") + e.what() + ")";
     return false;
   }
   if (m.model != model.name()) {

@@ -54,13 +54,24 @@ bool PlausibleControls(const void* data, size_t n, int max_controls, std::string
     *why = "num_controls " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
     return false;
   }
+  // Every string must have a length >= 1 (lcm-gen's decoder subtracts the NUL from it).
+  for (int64_t i = 0; i < count; ++i) {
+    if (!r.String()) {
+      *why = "controls_t.names[" + std::to_string(i) + "] is malformed";
+      return false;
+    }
+  }
+  if (!r.Skip(static_cast<size_t>(count) * 8)) {
+    *why = "controls_t.values truncated";
+    return false;
+  }
   return true;
 }
 
 bool PlausibleParams(const void* data, size_t n, int max_params, std::string* why) {
   Reader r(data, n);
   int64_t count = 0;
-  // hash, schema_version, utime, model, estimator, num_params
+  // hash, schema_version, utime, model, estimator, num_params (strings checked by String())
   if (!r.Skip(8 + 4 + 8) || !r.String() || !r.String() || !r.Int32(&count)) {
     *why = "truncated kincal.params_t header";
     return false;
@@ -75,6 +86,12 @@ bool PlausibleParams(const void* data, size_t n, int max_params, std::string* wh
   if (need > r.remaining()) {
     *why = "num_params " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
     return false;
+  }
+  for (int64_t i = 0; i < 2 * count; ++i) {  // names, then units
+    if (!r.String()) {
+      *why = "params_t.names/units[" + std::to_string(i % std::max<int64_t>(count, 1)) + "] is malformed";
+      return false;
+    }
   }
   return true;
 }

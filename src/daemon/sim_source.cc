@@ -131,7 +131,9 @@ class SimSource final : public FrameSource {
     if (cfg_.sim.reflection_prob > 0 && u01(fault_rng_) < cfg_.sim.reflection_prob) {
       // Within about one plate size of the target: inside the tracker's search region.
       const double reach = 2.0 * vis_.camera.fx * vis_.layout.plate_size_m.maxCoeff() / pose.t.z();
-      const Eigen::Vector2d c = centres.front() + Eigen::Vector2d(u01(fault_rng_) - 0.5, u01(fault_rng_) - 0.5) * reach;
+      const double dv = u01(fault_rng_) - 0.5;  // drawn in sequence: argument order is unspecified
+      const double du = u01(fault_rng_) - 0.5;
+      const Eigen::Vector2d c = centres.front() + Eigen::Vector2d(du, dv) * reach;
       cv::circle(*image, cv::Point(static_cast<int>(c.x() * 16), static_cast<int>(c.y() * 16)),
                  static_cast<int>(r_px * 16), cv::Scalar(render_.foreground), cv::FILLED, cv::LINE_AA, 4);
     }
