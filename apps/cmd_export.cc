@@ -2,7 +2,6 @@
 // robot's configuration can include, from a kincald checkpoint or the last
 // kincal.params_t in an LCM log.
 #include <kincal/params_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 #include <sys/stat.h>
 
 #include <fstream>
@@ -11,6 +10,7 @@
 #include "commands.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_log_reader.h"
 
 namespace kincal::app {
 
@@ -33,17 +33,18 @@ Command AddExport(CLI::App& app) {
     } else if (!a->log.empty()) {
       struct stat st {};
       if (::stat(a->log.c_str(), &st) != 0) throw std::runtime_error(a->log + ": cannot open");
-      lcm::LogFile file(a->log, "r");
-      if (!file.good()) throw std::runtime_error(a->log + ": not a readable LCM log");
+      LcmLogReader file(a->log);
       kincal::params_t last;
       bool found = false;
       int64_t bad = 0;
-      while (const lcm::LogEvent* ev = file.readNextEvent()) {
+      LcmLogEvent e;
+      while (file.Next(&e)) {
+        const LcmLogEvent* ev = &e;
         if (ev->channel != a->channel) continue;
         kincal::params_t m;
         std::string why;
-        if (!daemon::PlausibleParams(ev->data, static_cast<size_t>(ev->datalen), 1000, &why) ||
-            m.decode(ev->data, 0, ev->datalen) < 0 || m.num_params < 0 ||
+        if (!daemon::PlausibleParams(ev->data.data(), ev->data.size(), 1000, &why) ||
+            m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 || m.num_params < 0 ||
             m.covariance.size() != static_cast<size_t>(m.num_params)) {
           ++bad;
           continue;
@@ -53,6 +54,7 @@ Command AddExport(CLI::App& app) {
       }
       if (!found) throw std::runtime_error(a->log + ": no kincal.params_t on channel " + a->channel);
       if (bad > 0) std::cerr << "kincal export: " << bad << " undecodable events on " << a->channel << " skipped\n";
+      for (const auto& p : file.problems()) std::cerr << "kincal export: " << p << "\n";
       c.model = last.model;
       c.filter = last.estimator;
       c.utime = last.utime;

@@ -160,8 +160,9 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
     std::fprintf(stderr, "kincal_fuzz: give --target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame\n");
     std::exit(2);
   }
-  char tmpl[] = "/tmp/kincal_fuzz_XXXXXX";
-  const char* dir = ::mkdtemp(tmpl);
+  // Scratch files in memory when possible: every execution writes its input to a file.
+  std::string tmpl = (::access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp") + std::string("/kincal_fuzz_XXXXXX");
+  const char* dir = ::mkdtemp(tmpl.data());
   if (dir == nullptr) std::exit(2);
   g_dir = dir;
   std::atexit([] { std::filesystem::remove_all(g_dir); });

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "kincal/analysis/analyze.h"
+#include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
 
 namespace kincal {
@@ -143,6 +144,139 @@ TEST_F(Io, LcmLogReadsBack) {
   EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);        // omega
   EXPECT_NEAR(r.poses[2].z.x(), 0.1, 1e-12);
   EXPECT_THROW(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle")), RecordingError);
+}
+
+// Three events written by liblcm's own writer; the bytes of the file, for damaging.
+std::string ThreeEventLog(const std::filesystem::path& dir, std::vector<int64_t>* offsets) {
+  const std::string path = (dir / "three.lcm").string();
+  {
+    lcm::LogFile log(path, "w");
+    for (int k = 0; k < 3; ++k) {
+      std::vector<uint8_t> data(static_cast<size_t>(100 + k), static_cast<uint8_t>(k));
+      lcm::LogEvent ev{};
+      ev.timestamp = 1000 + k;
+      ev.channel = "CH" + std::to_string(k);
+      ev.datalen = static_cast<int32_t>(data.size());
+      ev.data = data.data();
+      log.writeEvent(&ev);
+    }
+  }
+  // Header 28 bytes + channel 3 bytes + data.
+  *offsets = {0, 28 + 3 + 100, 2 * (28 + 3) + 100 + 101};
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::vector<LcmLogEvent> ReadAll(LcmLogReader& r) {
+  std::vector<LcmLogEvent> out;
+  LcmLogEvent e;
+  while (r.Next(&e)) out.push_back(e);
+  return out;
+}
+
+TEST_F(Io, LcmLogReaderReadsWhatLiblcmWrites) {
+  std::vector<int64_t> off;
+  const std::string bytes = ThreeEventLog(dir_, &off);
+  ASSERT_EQ(bytes.size(), static_cast<size_t>(off[2] + 28 + 3 + 102));
+  LcmLogReader r((dir_ / "three.lcm").string());
+  const auto ev = ReadAll(r);
+  ASSERT_EQ(ev.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(ev[k].channel, "CH" + std::to_string(k));
+    EXPECT_EQ(ev[k].timestamp, 1000 + k);
+    EXPECT_EQ(ev[k].offset, off[k]);
+    EXPECT_EQ(ev[k].data, std::vector<uint8_t>(static_cast<size_t>(100 + k), static_cast<uint8_t>(k)));
+  }
+  EXPECT_EQ(r.damaged_bytes(), 0);
+  EXPECT_FALSE(r.truncated());
+  EXPECT_TRUE(r.problems().empty());
+  r.Rewind();
+  EXPECT_EQ(ReadAll(r).size(), 3u);
+  EXPECT_THROW(LcmLogReader((dir_ / "none.lcm").string()), std::runtime_error);
+}
+
+TEST_F(Io, LcmLogReaderNamesACutShortLastEvent) {
+  std::vector<int64_t> off;
+  const std::string bytes = ThreeEventLog(dir_, &off);
+  for (const size_t cut : {static_cast<size_t>(off[2] + 10), static_cast<size_t>(off[2] + 40)}) {
+    const std::string p = Write("cut.lcm", bytes.substr(0, cut));
+    LcmLogReader r(p);
+    EXPECT_EQ(ReadAll(r).size(), 2u) << cut;
+    EXPECT_TRUE(r.truncated());
+    ASSERT_EQ(r.problems().size(), 1u);
+    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[2])), std::string::npos) << r.problems()[0];
+    EXPECT_NE(r.problems()[0].find("cut short"), std::string::npos) << r.problems()[0];
+  }
+}
+
+TEST_F(Io, LcmLogReaderSkipsDamageAndSaysWhere) {
+  std::vector<int64_t> off;
+  const std::string bytes = ThreeEventLog(dir_, &off);
+  {  // A data length of 2^31 - 1 in the middle event: no allocation, skip to the third.
+    std::string b = bytes;
+    for (int i = 0; i < 4; ++i) b[static_cast<size_t>(off[1] + 24 + i)] = i == 0 ? '\x7f' : '\xff';
+    LcmLogReader r(Write("huge.lcm", b));
+    const auto ev = ReadAll(r);
+    ASSERT_EQ(ev.size(), 2u);
+    EXPECT_EQ(ev[0].channel, "CH0");
+    EXPECT_EQ(ev[1].channel, "CH2");
+    EXPECT_EQ(r.damaged_stretches(), 1);
+    EXPECT_EQ(r.damaged_bytes(), off[2] - off[1]);
+    EXPECT_FALSE(r.truncated());
+    ASSERT_EQ(r.problems().size(), 1u);
+    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[1])), std::string::npos) << r.problems()[0];
+  }
+  {  // Seven junk bytes between the first and second events.
+    std::string b = bytes;
+    b.insert(static_cast<size_t>(off[1]), "garbage");
+    LcmLogReader r(Write("junk.lcm", b));
+    EXPECT_EQ(ReadAll(r).size(), 3u);
+    EXPECT_EQ(r.damaged_bytes(), 7);
+    EXPECT_EQ(r.damaged_stretches(), 1);
+    ASSERT_EQ(r.problems().size(), 1u);
+    EXPECT_NE(r.problems()[0].find("sync word"), std::string::npos) << r.problems()[0];
+  }
+}
+
+TEST_F(Io, DamagedLcmLogIsReadWithWarnings) {
+  // ReadLcmLog keeps the good events and reports the damage as warnings.
+  const std::string path = (dir_ / "run.lcm").string();
+  {
+    lcm::LogFile log(path, "w");
+    for (int k = 0; k < 4; ++k) {
+      kincal::controls_t c{};
+      c.schema_version = 1;
+      c.utime = 1'000'000 + k * 100'000;
+      c.model = "unicycle";
+      c.num_controls = 2;
+      c.names = {"v", "omega"};
+      c.values = {0.5, 0.1};
+      kincal::pose_t p{};
+      p.schema_version = 1;
+      p.utime = c.utime + 50'000;
+      p.valid = 1;
+      for (int j = 0; j < 2; ++j) {
+        std::vector<uint8_t> buf(static_cast<size_t>(j == 0 ? c.getEncodedSize() : p.getEncodedSize()));
+        if (j == 0) c.encode(buf.data(), 0, static_cast<int>(buf.size()));
+        else p.encode(buf.data(), 0, static_cast<int>(buf.size()));
+        lcm::LogEvent ev{};
+        ev.timestamp = c.utime;
+        ev.channel = j == 0 ? "KINCAL_CONTROLS" : "KINCAL_POSE";
+        ev.datalen = static_cast<int32_t>(buf.size());
+        ev.data = buf.data();
+        log.writeEvent(&ev);
+      }
+    }
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string b(std::istreambuf_iterator<char>(in), {});
+  in.close();
+  Write("run.lcm", b.substr(0, b.size() - 5));  // the last pose cut short
+  const Recording r = ReadLcmLog(path, *MakeModel("unicycle"));
+  EXPECT_EQ(r.controls.size(), 4u);
+  EXPECT_EQ(r.poses.size(), 3u);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("cut short"), std::string::npos) << r.warnings[0];
 }
 
 TEST_F(Io, UnobservableParameterIsNamedWithTheMotionThatExcitesIt) {

@@ -240,43 +240,15 @@ TEST(GroundPlane, PoseFromRenderedImagesWithinItsCovariance) {
 }  // namespace kincal::vision
 
 #include "kincal/vision/calibration.h"
+#include "kincal/vision/synthetic.h"
 
 namespace kincal::vision {
 namespace {
 
-std::vector<CalibrationView> SyntheticViews(const CameraModel& cam, int n_views, double noise_px,
-                                            std::mt19937_64& rng) {
-  std::normal_distribution<double> g(0.0, noise_px);
-  std::uniform_real_distribution<double> U(-1.0, 1.0);
-  std::vector<CalibrationView> views;
-  while (static_cast<int>(views.size()) < n_views) {
-    CalibrationView v;
-    v.name = "view " + std::to_string(views.size());
-    const Eigen::Matrix3d R = (Eigen::AngleAxisd(M_PI + 0.5 * U(rng), Eigen::Vector3d::UnitX()) *
-                               Eigen::AngleAxisd(0.5 * U(rng), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(0.3 * U(rng), Eigen::Vector3d::UnitZ()))
-                                  .toRotationMatrix();
-    const Eigen::Vector3d t = Eigen::Vector3d(-0.1, 0.06, 0.7) + Draw3(U, rng).cwiseProduct(Eigen::Vector3d(0.08, 0.05, 0.2));
-    bool inside = true;
-    for (int r = 0; r < 6; ++r) {
-      for (int c = 0; c < 9; ++c) {
-        const Eigen::Vector3d X(0.025 * c, 0.025 * r, 0.0);
-        const Eigen::Vector3d Xc = R * X + t;
-        const Eigen::Vector2d px = cam.Project(Xc) + Draw2(g, rng);
-        inside = inside && Xc.z() > 0 && px.x() > 0 && px.y() > 0 && px.x() < cam.width - 1 && px.y() < cam.height - 1;
-        v.object.push_back(X);
-        v.image.push_back(px);
-      }
-    }
-    if (inside) views.push_back(v);
-  }
-  return views;
-}
-
 TEST(Calibration, RecoversIntrinsicsWithin3SigmaAndMatchesOpenCv) {
   const CameraModel truth = TestCamera();
   std::mt19937_64 rng(21);
-  const auto views = SyntheticViews(truth, 15, 0.1, rng);
+  const auto views = SyntheticBoardViews(truth, 15, 0.1, rng);
   CalibrationOptions opt;
   opt.width = truth.width;
   opt.height = truth.height;
@@ -296,7 +268,7 @@ TEST(Calibration, RecoversIntrinsicsWithin3SigmaAndMatchesOpenCv) {
 TEST(Calibration, BadInputNamesTheProblem) {
   const CameraModel truth = TestCamera();
   std::mt19937_64 rng(2);
-  auto views = SyntheticViews(truth, 4, 0.1, rng);
+  auto views = SyntheticBoardViews(truth, 4, 0.1, rng);
   CalibrationOptions opt;
   opt.width = truth.width;
   opt.height = truth.height;

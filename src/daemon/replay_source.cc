@@ -1,14 +1,16 @@
 // Replay of a kincald LCM log: frames go through the pipeline again, controls to the
 // filter with their recorded receive times.
 #include <kincal/frame_t.hpp>
-#include <lcm/eventlog.h>
+#include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
 #include <cstring>
+#include <optional>
 #include <thread>
 
 #include "kincal/daemon/lcm_guard.h"
 #include "kincal/daemon/sources.h"
+#include "kincal/io/lcm_log_reader.h"
 
 namespace kincal::daemon {
 namespace {
@@ -17,13 +19,16 @@ class ReplaySource final : public FrameSource {
  public:
   ReplaySource(const DaemonConfig& c, ControlIntake controls) : cfg_(c), intake_(std::move(controls)) {
     struct stat st {};
-    if (::stat(c.replay.path.c_str(), &st) != 0) throw SourceError(c.replay.path + ": cannot open log for replay");
-    log_ = lcm_eventlog_create(c.replay.path.c_str(), "r");
-    if (log_ == nullptr) throw SourceError(c.replay.path + ": not a readable LCM log");
+    if (::stat(c.replay.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+      throw SourceError(c.replay.path + ": cannot open log for replay (no such file)");
+    }
+    try {
+      log_.emplace(c.replay.path);
+    } catch (const std::runtime_error& e) {
+      throw SourceError(e.what());
+    }
   }
-  ~ReplaySource() override {
-    if (log_ != nullptr) lcm_eventlog_destroy(log_);
-  }
+  ~ReplaySource() override { ReportDamage(); }
   std::string name() const override { return "replay(" + cfg_.replay.path + ")"; }
   void Start() override { start_mono_ = MonotonicNs(); }
   void Stop() override { stopped_ = true; }
@@ -31,31 +36,23 @@ class ReplaySource final : public FrameSource {
 
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* error) override {
     while (!stopped_) {
-      lcm_eventlog_event_t* ev = lcm_eventlog_read_next_event(log_);
-      if (ev == nullptr) {
+      if (!log_->Next(&ev_)) {
+        ReportDamage();
         // End of the log: again, shifted later by its span plus one nominal frame period,
         // so that time keeps increasing.
         if (++loop_ >= cfg_.replay.loops || last_utime_ == INT64_MIN) return SourceStatus::kEnd;
         offset_ += last_utime_ - first_utime_ + 33'333;
-        lcm_eventlog_destroy(log_);
-        log_ = lcm_eventlog_create(cfg_.replay.path.c_str(), "r");
-        if (log_ == nullptr) {
-          *error = cfg_.replay.path + ": cannot reopen for the next loop";
-          return SourceStatus::kError;
-        }
+        log_->Rewind();
         continue;
       }
-      struct Free {
-        lcm_eventlog_event_t* e;
-        ~Free() { lcm_eventlog_free_event(e); }
-      } guard{ev};
+      const LcmLogEvent* ev = &ev_;
       ++events_;
       if (first_utime_ == INT64_MIN) first_utime_ = ev->timestamp;
       if (loop_ == 0) last_utime_ = std::max(last_utime_, ev->timestamp);
       if (cfg_.replay.speed > 0) Pace(ev->timestamp + offset_);
-      const std::string_view channel(ev->channel, static_cast<size_t>(ev->channellen));
+      const std::string_view channel(ev->channel);
       if (channel == cfg_.lcm.controls_channel) {
-        intake_(ev->data, static_cast<size_t>(ev->datalen), ev->timestamp + offset_);
+        intake_(ev->data.data(), ev->data.size(), ev->timestamp + offset_);
         continue;
       }
       if (channel != cfg_.lcm.frame_channel) {
@@ -63,8 +60,8 @@ class ReplaySource final : public FrameSource {
         continue;
       }
       std::string why;
-      if (!PlausibleFrame(ev->data, static_cast<size_t>(ev->datalen), &why) ||
-          msg_.decode(ev->data, 0, ev->datalen) < 0 || msg_.size != static_cast<int32_t>(msg_.data.size())) {
+      if (!PlausibleFrame(ev->data.data(), ev->data.size(), &why) ||
+          msg_.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 || msg_.size != static_cast<int32_t>(msg_.data.size())) {
         *error = cfg_.replay.path + ": event " + std::to_string(ev->eventnum) + " on " + std::string(channel) +
                  ": not a kincal.frame_t";
         ++bad_frames_;
@@ -89,9 +86,18 @@ class ReplaySource final : public FrameSource {
     }
     return SourceStatus::kEnd;
   }
-  int64_t rejected() const override { return bad_frames_; }
+  // Frames that could not be decoded, plus damaged stretches of the log file.
+  int64_t rejected() const override { return bad_frames_ + log_->damaged_stretches(); }
 
  private:
+  // Damage in the file (skipped bytes, a last event cut short) goes to the log once per
+  // pass, never silently; the count is in rejected() and so in health.
+  void ReportDamage() {
+    if (log_->problems().size() == reported_) return;
+    for (size_t i = reported_; i < log_->problems().size(); ++i) spdlog::warn("replay: {}", log_->problems()[i]);
+    reported_ = log_->problems().size();
+  }
+
   void Pace(int64_t utime) {
     const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(utime - first_utime_) * 1000.0 / cfg_.replay.speed);
     while (!stopped_ && MonotonicNs() < due) {
@@ -101,7 +107,9 @@ class ReplaySource final : public FrameSource {
 
   const DaemonConfig& cfg_;
   ControlIntake intake_;
-  lcm_eventlog_t* log_ = nullptr;
+  std::optional<LcmLogReader> log_;
+  LcmLogEvent ev_;
+  size_t reported_ = 0;
   kincal::frame_t msg_;
   TimeNs start_mono_ = 0;
   int64_t first_utime_ = INT64_MIN, last_utime_ = INT64_MIN, offset_ = 0;

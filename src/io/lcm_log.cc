@@ -1,13 +1,14 @@
 // Reads controls and poses from a kincald LCM event log.
 #include <kincal/controls_t.hpp>
 #include <kincal/pose_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 
 #include <cmath>
+#include <optional>
 #include <sys/stat.h>
 
 #include "kincal/angles.h"
 #include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
 
 namespace kincal {
@@ -16,8 +17,12 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
                      const std::string& controls_channel, const std::string& pose_channel) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw RecordingError(path + ": cannot open for reading");
-  lcm::LogFile log(path, "r");
-  if (!log.good()) throw RecordingError(path + ": not a readable LCM log");
+  std::optional<LcmLogReader> log;
+  try {
+    log.emplace(path);
+  } catch (const std::runtime_error& e) {
+    throw RecordingError(e.what());
+  }
   // Map the recorded channel names onto the model's control order.
   std::vector<int> order;
   struct C {
@@ -26,18 +31,18 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   };
   std::vector<C> controls;
   std::vector<std::pair<double, Eigen::Vector3d>> poses;
-  int64_t event = 0;
   RecordingStats stats;
-  while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    ++event;
-    const std::string where = path + ": event " + std::to_string(ev->eventnum);
+  LcmLogEvent e;
+  const LcmLogEvent* ev = &e;
+  while (log->Next(&e)) {
+    const std::string where = path + ": event " + std::to_string(ev->eventnum) + " (byte " + std::to_string(ev->offset) + ")";
     if (ev->channel == controls_channel) {
       kincal::controls_t m;
       std::string why;
-      if (!daemon::PlausibleControls(ev->data, static_cast<size_t>(ev->datalen), kMaxControls, &why)) {
+      if (!daemon::PlausibleControls(ev->data.data(), ev->data.size(), kMaxControls, &why)) {
         throw RecordingError(where + " on " + ev->channel + ": " + why);
       }
-      if (m.decode(ev->data, 0, ev->datalen) < 0) {
+      if (m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0) {
         throw RecordingError(where + " on " + ev->channel + ": not a kincal.controls_t");
       }
       std::vector<double> v(static_cast<size_t>(model.num_controls()), 0.0);
@@ -62,7 +67,7 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
       controls.push_back({static_cast<double>(m.utime) * 1e-6, std::move(v)});
     } else if (ev->channel == pose_channel) {
       kincal::pose_t m;
-      if (m.decode(ev->data, 0, ev->datalen) < 0) {
+      if (m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0) {
         throw RecordingError(where + " on " + ev->channel + ": not a kincal.pose_t");
       }
       if (!m.valid) continue;
@@ -97,7 +102,12 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   stats.control_rows = static_cast<int>(controls.size());
   stats.pose_rows = static_cast<int>(poses.size());
   rec.stats = stats;
-  (void)event;
+  // Damage is not fatal (the rest of the log is still good) but never silent.
+  for (const auto& p : log->problems()) rec.warnings.push_back(p);
+  if (log->damaged_stretches() > static_cast<int64_t>(log->problems().size())) {
+    rec.warnings.push_back(path + ": " + std::to_string(log->damaged_stretches()) + " damaged stretches in all, " +
+                           std::to_string(log->damaged_bytes()) + " bytes skipped");
+  }
   return rec;
 }
 
