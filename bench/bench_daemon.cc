@@ -1,11 +1,17 @@
 // kincald end to end: replay throughput in --fast mode and frame-to-publish latency at
 // --speed 1, on a recorded raw 640x480 GREY 30 fps log of the simulated robot.
 #include <benchmark/benchmark.h>
+#include <spawn.h>
 #include <spdlog/spdlog.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <string>
+#include <vector>
 
 #include "kincal/daemon/daemon.h"
 
@@ -83,6 +89,41 @@ void BM_DaemonLatencySpeed1(benchmark::State& state) {
   state.counters["peak_rss_mb"] = PeakRssMb();
 }
 BENCHMARK(BM_DaemonLatencySpeed1)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// Resident memory of kincald itself: the installed-style binary beside this benchmark
+// replays the log five times (3000 frames) in --fast mode; peak RSS from wait4().
+void BM_KincaldPeakResidentMemory(benchmark::State& state) {
+  const std::string& log = Log();
+  const std::string exe = (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "kincald").string();
+  if (!std::filesystem::exists(exe)) {
+    state.SkipWithError("kincald is not built beside kincal_bench");
+    return;
+  }
+  double peak_mb = 0, seconds = 0;
+  for (auto _ : state) {
+    std::vector<std::string> args = {exe, "--replay", log, "--fast", "--loop", "5", "--lcm-url", "memq://", "-q"};
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const auto t0 = std::chrono::steady_clock::now();
+    pid_t pid = 0;
+    if (posix_spawn(&pid, exe.c_str(), nullptr, nullptr, argv.data(), environ) != 0) {
+      state.SkipWithError("cannot start kincald");
+      return;
+    }
+    int status = 0;
+    rusage ru{};
+    if (wait4(pid, &status, 0, &ru) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+      state.SkipWithError("kincald failed");
+      return;
+    }
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    peak_mb = static_cast<double>(ru.ru_maxrss) / 1024.0;
+  }
+  state.counters["kincald_peak_rss_mb"] = peak_mb;
+  state.counters["frames_per_s"] = 3000.0 * static_cast<double>(state.iterations()) / seconds;
+}
+BENCHMARK(BM_KincaldPeakResidentMemory)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
 
 }  // namespace
 }  // namespace kincal::daemon

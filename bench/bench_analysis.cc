@@ -1,0 +1,79 @@
+// Accuracy and scaling of the offline estimators:
+//  - the thesis experiment (ch. 6) in simulation: NNDE of SR-DD2, EKF, UKF and the batch
+//    fit against the Bayesian Cramer-Rao bound, RMS over Monte-Carlo trials;
+//  - Analyze() time against recording length (a differential-drive robot with a hidden
+//    time offset, 20 Hz poses), with the window caps lifted so that every window counts.
+#include <benchmark/benchmark.h>
+
+#include <random>
+
+#include "kincal/analysis/analyze.h"
+#include "kincal/model.h"
+#include "kincal/simulator.h"
+#include "kincal/thesis.h"
+
+namespace kincal {
+namespace {
+
+void BM_ThesisAccuracy(benchmark::State& state) {
+  ThesisOptions o;
+  o.trials = 32;
+  o.seed = 2003;
+  o.per_run = false;
+  ThesisResult r;
+  for (auto _ : state) r = ReproduceThesis(o);
+  state.counters["bound_pct"] = r.joint_bound_nnde_percent;
+  for (const auto& [name, v] : r.joint_nnde_percent) {
+    state.counters[name + "_pct"] = v;
+    state.counters[name + "_over_bound"] = v / r.joint_bound_nnde_percent;
+    state.counters[name + "_in_3sigma"] = r.joint_within_3sigma.at(name);
+  }
+  state.counters["thesis_pct"] = r.thesis_nnde_percent;
+  state.counters["trials"] = o.trials;
+}
+BENCHMARK(BM_ThesisAccuracy)->Unit(benchmark::kSecond)->Iterations(1);
+
+Recording DiffDriveRecording(double duration_s) {
+  const System truth = MakeSystem("diffdrive", {"time_offset"});
+  VecN<kMaxState> p(truth.num_params());
+  p.setZero();
+  p[truth.ParamIndex("r_l")] = 0.031;
+  p[truth.ParamIndex("r_r")] = 0.0313;
+  p[truth.ParamIndex("d")] = 0.148;
+  p[truth.ParamIndex("delay_s")] = 0.05;
+  std::mt19937_64 rng(5);
+  Recording rec;
+  rec.source = "simulated diffdrive";
+  rec.controls = ControlSignal(truth.num_controls(), 0);
+  const TimeNs t1 = SecondsToNs(duration_s);
+  const std::vector<double> lo = {-10.0, -10.0}, hi = {25.0, 25.0};
+  AppendPiecewiseRandom(&rec.controls, 0, t1, lo, hi, 0.7, 2.5, rng);
+  const auto times = FrameTimes(0, t1, FrameTimingOptions{20.0, 0.0, 0.0, 0.0}, rng);
+  const StateVec x0 = truth.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
+  const auto traj = SimulateTruth(truth, x0, rec.controls, times);
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
+  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
+  return rec;
+}
+
+void BM_AnalyzeVsLength(benchmark::State& state) {
+  const double seconds = static_cast<double>(state.range(0));
+  const Recording rec = DiffDriveRecording(seconds);
+  AnalyzeOptions o;
+  o.model = "diffdrive";
+  o.effects_mode = "list";
+  o.effects = {"time_offset"};
+  o.max_fit_windows = 1 << 30;
+  o.max_eval_windows = 1 << 30;
+  AnalyzeResult r;
+  for (auto _ : state) r = Analyze(rec, o);
+  state.counters["recording_s"] = seconds;
+  state.counters["poses"] = static_cast<double>(rec.poses.size());
+  state.counters["fit_windows"] = r.after.fit_windows;
+  state.counters["heldout_mm_before"] = 1e3 * r.before.heldout.pos_rms_m;
+  state.counters["heldout_mm_after"] = 1e3 * r.after.heldout.pos_rms_m;
+}
+BENCHMARK(BM_AnalyzeVsLength)->Arg(30)->Arg(60)->Arg(120)->Arg(240)->Unit(benchmark::kSecond)->Iterations(1);
+
+}  // namespace
+}  // namespace kincal
