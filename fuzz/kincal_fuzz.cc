@@ -14,6 +14,7 @@
 #include <kincal/frame_t.hpp>
 #include <kincal/params_t.hpp>
 #include <kincal/pose_t.hpp>
+#include <spdlog/spdlog.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -160,6 +161,9 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
     std::fprintf(stderr, "kincal_fuzz: give --target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame\n");
     std::exit(2);
   }
+  // The library's warnings (e.g. replay naming each damaged stretch) would flood the
+  // output at thousands of executions per second.
+  spdlog::set_level(spdlog::level::off);
   // Scratch files in memory when possible: every execution writes its input to a file.
   std::string tmpl = (::access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp") + std::string("/kincal_fuzz_XXXXXX");
   const char* dir = ::mkdtemp(tmpl.data());

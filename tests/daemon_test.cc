@@ -471,6 +471,8 @@ TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
       }
     }
   }
+  // And the log ends with an event cut short (a header without its body).
+  std::ofstream(hostile, std::ios::app | std::ios::binary) << std::string("\xed\xa1\xda\x01\0\0\0\0", 8);
   DaemonConfig r = c;
   r.source = "replay";
   r.replay.path = hostile;
@@ -479,7 +481,7 @@ TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
   Daemon d(r);
   ASSERT_EQ(d.Run(), 0);
   EXPECT_EQ(d.counters().controls_rejected, 4);
-  EXPECT_EQ(d.counters().frame_errors, 1);
+  EXPECT_EQ(d.counters().frame_errors, 2);  // the corrupt frame and the cut-short end
   EXPECT_EQ(d.Estimate().values, clean.values) << "rejected input must not change the estimate";
 }
 

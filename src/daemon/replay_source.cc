@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
+#include <atomic>
 #include <cstring>
 #include <optional>
 #include <thread>
@@ -36,7 +37,9 @@ class ReplaySource final : public FrameSource {
 
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* error) override {
     while (!stopped_) {
-      if (!log_->Next(&ev_)) {
+      const bool got = log_->Next(&ev_);
+      damaged_.store(log_->damaged_stretches(), std::memory_order_relaxed);
+      if (!got) {
         ReportDamage();
         // End of the log: again, shifted later by its span plus one nominal frame period,
         // so that time keeps increasing.
@@ -87,7 +90,8 @@ class ReplaySource final : public FrameSource {
     return SourceStatus::kEnd;
   }
   // Frames that could not be decoded, plus damaged stretches of the log file.
-  int64_t rejected() const override { return bad_frames_ + log_->damaged_stretches(); }
+  // (Read by the health thread: atomics.)
+  int64_t rejected() const override { return bad_frames_.load() + damaged_.load(); }
 
  private:
   // Damage in the file (skipped bytes, a last event cut short) goes to the log once per
@@ -114,7 +118,8 @@ class ReplaySource final : public FrameSource {
   TimeNs start_mono_ = 0;
   int64_t first_utime_ = INT64_MIN, last_utime_ = INT64_MIN, offset_ = 0;
   int loop_ = 0;
-  int64_t events_ = 0, skipped_ = 0, bad_frames_ = 0;
+  int64_t events_ = 0, skipped_ = 0;
+  std::atomic<int64_t> bad_frames_{0}, damaged_{0};
   std::atomic<bool> stopped_{false};
 };
 

@@ -68,6 +68,7 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
     if (left < kHeaderBytes) {
       // Shorter than a header: a final event cut short (e.g. the logger was killed), or junk.
       truncated_ = true;
+      ++damaged_stretches_;
       damaged_bytes_ += left;
       Problem("byte " + std::to_string(start) + ": the last " + std::to_string(left) +
               " bytes are not a whole event header (log cut short); they are lost");
@@ -92,6 +93,7 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
       const int64_t before = damaged_bytes_;
       if (!Resync(start, start + 1)) {
         truncated_ = true;
+        ++damaged_stretches_;
         Problem("byte " + std::to_string(start) + ": event " + std::to_string(eventnum) + " needs " +
                 std::to_string(kHeaderBytes + body) + " bytes but " + std::to_string(left) +
                 " remain (log cut short); it is lost");

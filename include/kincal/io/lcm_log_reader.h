@@ -44,6 +44,7 @@ class LcmLogReader {
 
   const std::string& path() const { return path_; }
   int64_t damaged_bytes() const { return damaged_bytes_; }
+  // Damaged stretches skipped, plus one for a last event cut short.
   int64_t damaged_stretches() const { return damaged_stretches_; }
   bool truncated() const { return truncated_; }
   // One line per problem (the first 20; the counters have the rest), each naming the
