@@ -220,7 +220,27 @@ TEST(Frames, BadBuffersAreErrorsNotCrashes) {
     ToGrey(p, &out);
     FAIL();
   } catch (const FrameError& e) {
-    EXPECT_NE(std::string(e.what()).find("decodes to 64x48, expected 32x48"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("declares 64x48, expected 32x48"), std::string::npos) << e.what();
+  }
+  // Content in another format is not handed to whichever OpenCV decoder claims it (the
+  // fuzzer found a DICOM reader that aborts the process): the declared format only.
+  p.width = 64;
+  cv::Mat ok;
+  ToGrey(p, &ok);
+  EXPECT_EQ(cv::norm(ok, g, cv::NORM_INF), 0.0);
+  Frame other = p;
+  other.format = PixelFormat::kMjpeg;  // PNG bytes labelled MJPG
+  EXPECT_THROW(ToGrey(other, &out), FrameError);
+  std::ifstream crash(std::string(KINCAL_SOURCE_DIR) + "/fuzz/corpus/frame/regress-dicom-abort", std::ios::binary);
+  ASSERT_TRUE(crash.good());
+  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(crash)), {});
+  ASSERT_GT(bytes.size(), 5u);
+  other.width = bytes[1] + 1;  // as the harness builds its frame: format, width, height, stride
+  other.height = bytes[2] + 1;
+  other.data.assign(bytes.begin() + 5, bytes.end());
+  for (PixelFormat fmt : {PixelFormat::kMjpeg, PixelFormat::kPng}) {
+    other.format = fmt;
+    EXPECT_THROW(ToGrey(other, &out), FrameError);
   }
 }
 

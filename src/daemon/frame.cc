@@ -29,6 +29,68 @@ PixelFormat ParsePixelFormat(std::string_view name) {
   throw std::invalid_argument("pixel format '" + std::string(name) + "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
 }
 
+namespace {
+
+// The image size in a PNG (IHDR) or JPEG (first SOFn segment) header must be the frame's.
+bool EncodedHeaderMatches(const Frame& f, std::string* why) {
+  const uint8_t* d = f.data.data();
+  const size_t n = f.data.size();
+  auto be16 = [&](size_t i) { return static_cast<int>(d[i]) << 8 | d[i + 1]; };
+  int w = -1, h = -1;
+  if (f.format == PixelFormat::kPng) {
+    static constexpr uint8_t kSig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    if (n < 24 || std::memcmp(d, kSig, 8) != 0 || std::memcmp(d + 12, "IHDR", 4) != 0) {
+      *why = "not PNG data (no PNG signature and IHDR header)";
+      return false;
+    }
+    if (d[16] != 0 || d[17] != 0 || d[20] != 0 || d[21] != 0) {
+      *why = "PNG header declares an image larger than 65535 pixels on a side";
+      return false;
+    }
+    w = be16(18);
+    h = be16(22);
+  } else {
+    if (n < 4 || d[0] != 0xff || d[1] != 0xd8) {
+      *why = "not JPEG data (no start-of-image marker FF D8)";
+      return false;
+    }
+    for (size_t i = 2; i + 9 < n;) {
+      if (d[i] != 0xff) {
+        *why = "JPEG data: no marker at byte " + std::to_string(i);
+        return false;
+      }
+      const uint8_t m = d[i + 1];
+      if (m == 0xff) {  // fill byte
+        ++i;
+        continue;
+      }
+      if (m >= 0xc0 && m <= 0xcf && m != 0xc4 && m != 0xc8 && m != 0xcc) {
+        h = be16(i + 5);
+        w = be16(i + 7);
+        break;
+      }
+      if (m == 0xd9 || m == 0xda) break;  // end of image / start of scan before any frame header
+      if (m == 0x01 || (m >= 0xd0 && m <= 0xd7)) {  // standalone markers carry no length
+        i += 2;
+        continue;
+      }
+      i += 2 + static_cast<size_t>(be16(i + 2));
+    }
+    if (w < 0) {
+      *why = "JPEG data without a frame header (SOFn) before the scan";
+      return false;
+    }
+  }
+  if (w != f.width || h != f.height) {
+    *why = "header declares " + std::to_string(w) + "x" + std::to_string(h) + ", expected " +
+           std::to_string(f.width) + "x" + std::to_string(f.height);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 void ToGrey(const Frame& f, cv::Mat* grey) {
   const auto size_error = [&](size_t need) {
     return FrameError(std::string(PixelFormatName(f.format)) + " frame " + std::to_string(f.width) + "x" +
@@ -73,6 +135,11 @@ void ToGrey(const Frame& f, cv::Mat* grey) {
     case PixelFormat::kMjpeg:
     case PixelFormat::kPng: {
       if (f.data.empty()) throw FrameError(std::string(PixelFormatName(f.format)) + " frame is empty");
+      // cv::imdecode picks a decoder by content (DICOM, TIFF, JPEG 2000, HDR...; one of
+      // them aborts the process on malformed input): only the declared format goes
+      // through, with its header's image size checked before anything is decompressed.
+      std::string why;
+      if (!EncodedHeaderMatches(f, &why)) throw FrameError(std::string(PixelFormatName(f.format)) + " frame: " + why);
       const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1, const_cast<uint8_t*>(f.data.data()));
       cv::Mat decoded;
       try {
