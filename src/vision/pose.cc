@@ -78,17 +78,49 @@ bool PlanarInitialPose(std::span<const Eigen::Vector3d> object,
                        std::span<const Eigen::Vector2d> normalized, Pose3* pose) {
   const size_t n = object.size();
   if (n < 4 || normalized.size() != n) return false;
-  // DLT for H with normalised image = H [X Y 1]^T.
-  Eigen::MatrixXd A(2 * n, 9);
+  // DLT for H with normalised image ~ H [X Y 1]^T, with h33 = 1 (h33 is the target's depth
+  // along the optical axis up to scale: positive for any target in front of the camera).
+  // Points are centred and scaled first (Hartley) and the 8 x 8 normal equations are
+  // accumulated point by point: fixed-size, no allocation, no SVD of the 2n x 9 system.
+  Eigen::Vector2d mo = Eigen::Vector2d::Zero(), mi = Eigen::Vector2d::Zero();
   for (size_t i = 0; i < n; ++i) {
-    const double X = object[i].x(), Y = object[i].y(), u = normalized[i].x(), v = normalized[i].y();
-    A.row(static_cast<long>(2 * i)) << X, Y, 1, 0, 0, 0, -u * X, -u * Y, -u;
-    A.row(static_cast<long>(2 * i + 1)) << 0, 0, 0, X, Y, 1, -v * X, -v * Y, -v;
+    mo += object[i].head<2>();
+    mi += normalized[i];
   }
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const Eigen::VectorXd h = svd.matrixV().col(8);
-  Eigen::Matrix3d Hm;
-  Hm << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8];
+  mo /= static_cast<double>(n);
+  mi /= static_cast<double>(n);
+  double so = 0, si = 0;
+  for (size_t i = 0; i < n; ++i) {
+    so += (object[i].head<2>() - mo).norm();
+    si += (normalized[i] - mi).norm();
+  }
+  if (!(so > 0) || !(si > 0)) return false;
+  so = static_cast<double>(n) / so;  // mean distance from the centroid becomes 1
+  si = static_cast<double>(n) / si;
+  Eigen::Matrix<double, 8, 8> N = Eigen::Matrix<double, 8, 8>::Zero();
+  Eigen::Matrix<double, 8, 1> rhs = Eigen::Matrix<double, 8, 1>::Zero();
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d o = so * (object[i].head<2>() - mo), m = si * (normalized[i] - mi);
+    const double X = o.x(), Y = o.y(), u = m.x(), v = m.y();
+    Eigen::Matrix<double, 8, 1> a;
+    a << X, Y, 1, 0, 0, 0, -u * X, -u * Y;
+    N.selfadjointView<Eigen::Lower>().rankUpdate(a);
+    rhs += a * u;
+    a << 0, 0, 0, X, Y, 1, -v * X, -v * Y;
+    N.selfadjointView<Eigen::Lower>().rankUpdate(a);
+    rhs += a * v;
+  }
+  const Eigen::LDLT<Eigen::Matrix<double, 8, 8>, Eigen::Lower> ldlt(N);
+  if (ldlt.info() != Eigen::Success) return false;
+  const Eigen::Matrix<double, 8, 1> h = ldlt.solve(rhs);
+  if (!h.allFinite()) return false;
+  Eigen::Matrix3d Hn;
+  Hn << h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], 1.0;
+  // Undo the normalisations: H = Ti^-1 Hn To.
+  Eigen::Matrix3d To, Ti_inv;
+  To << so, 0, -so * mo.x(), 0, so, -so * mo.y(), 0, 0, 1;
+  Ti_inv << 1 / si, 0, mi.x(), 0, 1 / si, mi.y(), 0, 0, 1;
+  const Eigen::Matrix3d Hm = Ti_inv * Hn * To;
   double lambda = 1.0 / Hm.col(0).norm();
   if (Hm(2, 2) * lambda < 0) lambda = -lambda;  // target in front of the camera
   Eigen::Vector3d r1 = lambda * Hm.col(0), r2 = lambda * Hm.col(1);
