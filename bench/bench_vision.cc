@@ -305,17 +305,6 @@ void CalibrationBenchmark(benchmark::State& state, bool opencv) {
   state.counters["cy_err_px"] = std::abs(est.cy - truth.cy);
   state.counters["k1_err"] = std::abs(est.k1 - truth.k1);
   state.counters["rms_px"] = rms;
-  // Reprojection error of the estimated camera against the true one over the image, px.
-  double e2 = 0;
-  int n = 0;
-  for (double u = 20; u < truth.width - 20; u += 20) {
-    for (double v = 20; v < truth.height - 20; v += 20) {
-      const Eigen::Vector2d dir = truth.PixelToNormalized(Eigen::Vector2d(u, v));
-      e2 += (est.NormalizedToPixel(dir) - Eigen::Vector2d(u, v)).squaredNorm();
-      ++n;
-    }
-  }
-  state.counters["map_rms_px"] = std::sqrt(e2 / n);
 }
 void BM_CalibrateKincal(benchmark::State& state) { CalibrationBenchmark(state, false); }
 void BM_CalibrateOpenCv(benchmark::State& state) { CalibrationBenchmark(state, true); }
