@@ -66,7 +66,11 @@ def main() -> int:
             "| resolution | kincal full frame fps | kincal tracking fps | cv::threshold + connectedComponents fps | SimpleBlobDetector + solvePnP fps | targets (full / tracking) |",
             "|---|---|---|---|---|---|"]
     for w, h in ((640, 480), (1280, 720), (1920, 1080)):
-        target = "≥ 1500 / ≥ 10000" if (w, h) == (1280, 720) else ""
+        target = ""
+        if (w, h) == (1280, 720):
+            full, track = times.get(f"BM_KincalFullFrame/{w}/{h}"), times.get(f"BM_KincalTracked/{w}/{h}")
+            ok = full and track and 1e6 / full >= 1500 and 1e6 / track >= 10000
+            target = "≥ 1500 / ≥ 10000: " + ("met" if ok else "NOT met")
         out.append(f"| {w}×{h} | {fps(f'BM_KincalFullFrame/{w}/{h}')} | {fps(f'BM_KincalTracked/{w}/{h}')} | "
                    f"{fps(f'BM_OpenCvThresholdComponents/{w}/{h}')} | {fps(f'BM_OpenCvBlobDetectorSolvePnP/{w}/{h}')} | {target} |")
     def counter(name, key):
@@ -81,12 +85,15 @@ def main() -> int:
     out += ["", "## Pose from four markers (512 random views, 0.6–1.5 m, tilts to 45°, 0.1 px noise)", "",
             "| solver | µs per pose | position RMS mm | rotation RMS mrad | wrong or failed % | target |",
             "|---|---|---|---|---|---|"]
-    for label, name, target in (("Lowe, fully projective (homography start + Gauss-Newton)", "BM_PoseLowe", "≤ 5 µs"),
+    def met(value, limit):
+        return f"≤ {limit} µs: " + ("met" if value <= limit else "NOT met")
+
+    for label, name, target in (("Lowe, fully projective (homography start + Gauss-Newton)", "BM_PoseLowe", met(us("BM_PoseLowe"), 5)),
                                 ("cv::solvePnP ITERATIVE", "BM_PoseSolvePnPIterative", ""),
                                 ("cv::solvePnP IPPE", "BM_PoseSolvePnPIppe", "")):
         out.append(f"| {label} | {us(name):.2f} | {counter(name, 'pos_rms_mm'):.3f} | "
                    f"{counter(name, 'rot_rms_mrad'):.3f} | {counter(name, 'failed_pct'):.1f} | {target} |")
-    out += [f"| Lowe from the previous frame's pose (tracking) | {us('BM_LoweFromPreviousPose'):.2f} | | | | ≤ 5 µs |",
+    out += [f"| Lowe from the previous frame's pose (tracking) | {us('BM_LoweFromPreviousPose'):.2f} | | | | {met(us('BM_LoweFromPreviousPose'), 5)} |",
             f"| ground-plane (x, y, θ) on a calibrated floor | {us('BM_GroundPlane'):.2f} | | | | |",
             "", "Errors are against the true pose of each view; a solution more than 5 cm or 0.2 rad "
             "off (the mirrored planar pose) counts as wrong and is left out of the RMS."]
@@ -105,8 +112,8 @@ def main() -> int:
                    f"{counter(name, 'rms_px'):.4f} |")
     out += ["", "Both minimise the same reprojection error from their own starting points and reach "
             "the same optimum; the errors against the true camera are those of the data (0.1 px noise)."]
-    t = "BM_ThesisAccuracy"
-    if t in counters:
+    t = next((n for n in counters if n.startswith("BM_ThesisAccuracy")), None)
+    if t:
         bound = counter(t, "bound_pct")
         out += ["", f"## Accuracy on the thesis experiment (99 runs, {counter(t, 'trials'):.0f} Monte-Carlo trials)", "",
                 "| estimator | NNDE % (RMS) | ÷ Cramér-Rao bound | errors inside 3σ | target |", "|---|---|---|---|---|"]
@@ -128,6 +135,10 @@ def main() -> int:
             rec = counter(n, "recording_s")
             out.append(f"| {rec:.0f} | {counter(n, 'poses'):.0f} | {counter(n, 'fit_windows'):.0f} | {sec:.2f} | "
                        f"{60 * sec / rec:.2f} | {counter(n, 'heldout_mm_before'):.2f} → {counter(n, 'heldout_mm_after'):.2f} |")
+        out += ["", "The work per window is fixed (a prediction over the horizon and its Jacobian), so the "
+                "cost is linear in the number of windows plus a fixed part (staged, multi-start fits, "
+                "the effect's own fit); at these lengths the fixed part still dominates. By default "
+                "`max_fit_windows` (250) and `max_eval_windows` (4000) cap the work for long recordings."]
 
     out += ["", "## kincald end to end (raw 640×480 GREY 30 fps log of the simulated robot)", "",
             "| figure | kincald | target |", "|---|---|---|",
@@ -139,7 +150,7 @@ def main() -> int:
             f"| frames dropped at `--speed 1` | {counter('BM_DaemonLatencySpeed1', 'frames_dropped'):.0f} | 0 |",
             f"| peak resident memory of kincald (`--replay --fast`, 3000 frames) (MB) | {counter('BM_KincaldPeakResidentMemory', 'kincald_peak_rss_mb'):.0f} | |",
             "", "Latency runs from the moment the source hands a frame over to the publication of its "
-            "pose. Memory is kincald's own peak resident set (a separate process, from wait4)."]
+            "pose. Memory is kincald's own peak resident set (a separate process; its VmHWM)."]
     with open(sys.argv[2], "w") as f:
         f.write("\n".join(out) + "\n")
     return 0

@@ -51,11 +51,17 @@ LoweResult LowePose(std::span<const Eigen::Vector3d> object,
       if (c.z() <= 0) return r;
       const double iz = 1.0 / c.z();
       const Eigen::Vector2d e = normalized[i] - Eigen::Vector2d(c.x() * iz, c.y() * iz);
-      const Eigen::Matrix<double, 2, 6> J = LoweJacobian(object[i], Pose3{R, D});
-      H += J.transpose() * J;
-      g += J.transpose() * e;
+      // LoweJacobian(object[i], {R, D}), with xr and c already at hand.
+      Eigen::Matrix<double, 2, 3> dproj;
+      dproj << iz, 0, -c.x() * iz * iz, 0, iz, -c.y() * iz * iz;
+      Eigen::Matrix<double, 2, 6> J;
+      J.leftCols<3>() = dproj;
+      J.rightCols<3>() = -dproj * Skew(xr);
+      H.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+      g.noalias() += J.transpose() * e;
       sse += e.squaredNorm();
     }
+    H = H.selfadjointView<Eigen::Lower>();
     const Eigen::Matrix<double, 6, 1> step = H.ldlt().solve(g);
     D += step.head<3>();
     R = Exp(step.tail<3>()) * R;
