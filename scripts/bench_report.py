@@ -35,6 +35,10 @@ def main() -> int:
     out.append(f"Machine: {cpu} ({platform.machine()}), {ctx.get('num_cpus', '?')} CPUs at "
                f"{ctx.get('mhz_per_cpu', '?')} MHz; run {ctx.get('date', '?')}. kincal built "
                f"Release; times are CPU µs per call, median of 3 repetitions, one thread.")
+    if ctx.get("partial_rerun"):
+        out.append("")
+        out.append(f"Rows re-run after later fixes, while other work occupied the cores (so slower than "
+                   f"on an idle machine): {ctx['partial_rerun']}.")
     out += ["", "## Filter step (predict over one 30 Hz frame interval + pose update)", "",
             "| model | SR-DD2 µs | EKF µs | UKF µs | DD2 / EKF | target DD2 ≤ 10 µs |",
             "|---|---|---|---|---|---|"]
