@@ -57,11 +57,10 @@ LoweResult LowePose(std::span<const Eigen::Vector3d> object,
       Eigen::Matrix<double, 2, 6> J;
       J.leftCols<3>() = dproj;
       J.rightCols<3>() = -dproj * Skew(xr);
-      H.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+      H.noalias() += J.transpose() * J;
       g.noalias() += J.transpose() * e;
       sse += e.squaredNorm();
     }
-    H = H.selfadjointView<Eigen::Lower>();
     const Eigen::Matrix<double, 6, 1> step = H.ldlt().solve(g);
     D += step.head<3>();
     R = Exp(step.tail<3>()) * R;
