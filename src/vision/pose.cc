@@ -18,11 +18,8 @@ Eigen::Matrix3d Exp(const Eigen::Vector3d& w) {
   return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
 }
 
-}  // namespace
-
-Eigen::Matrix<double, 2, 6> LoweJacobian(const Eigen::Vector3d& p, const Pose3& pose) {
-  const Eigen::Vector3d xr = pose.R * p;
-  const Eigen::Vector3d c = xr + pose.t;
+// d(normalised projection)/d(D, w) at the rotated point xr = R p and camera point c = xr + D.
+Eigen::Matrix<double, 2, 6> LoweJacobianAt(const Eigen::Vector3d& xr, const Eigen::Vector3d& c) {
   const double iz = 1.0 / c.z();
   Eigen::Matrix<double, 2, 3> dproj;
   dproj << iz, 0, -c.x() * iz * iz, 0, iz, -c.y() * iz * iz;
@@ -30,6 +27,13 @@ Eigen::Matrix<double, 2, 6> LoweJacobian(const Eigen::Vector3d& p, const Pose3& 
   J.leftCols<3>() = dproj;
   J.rightCols<3>() = -dproj * Skew(xr);
   return J;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 2, 6> LoweJacobian(const Eigen::Vector3d& p, const Pose3& pose) {
+  const Eigen::Vector3d xr = pose.R * p;
+  return LoweJacobianAt(xr, xr + pose.t);
 }
 
 LoweResult LowePose(std::span<const Eigen::Vector3d> object,
@@ -51,12 +55,7 @@ LoweResult LowePose(std::span<const Eigen::Vector3d> object,
       if (c.z() <= 0) return r;
       const double iz = 1.0 / c.z();
       const Eigen::Vector2d e = normalized[i] - Eigen::Vector2d(c.x() * iz, c.y() * iz);
-      // LoweJacobian(object[i], {R, D}), with xr and c already at hand.
-      Eigen::Matrix<double, 2, 3> dproj;
-      dproj << iz, 0, -c.x() * iz * iz, 0, iz, -c.y() * iz * iz;
-      Eigen::Matrix<double, 2, 6> J;
-      J.leftCols<3>() = dproj;
-      J.rightCols<3>() = -dproj * Skew(xr);
+      const Eigen::Matrix<double, 2, 6> J = LoweJacobianAt(xr, c);
       H.noalias() += J.transpose() * J;
       g.noalias() += J.transpose() * e;
       sse += e.squaredNorm();
