@@ -15,6 +15,19 @@
 namespace kincal {
 namespace {
 
+// Appends one encoded LCM message to a log written with liblcm's own writer.
+template <typename Msg>
+void PutMessage(lcm::LogFile& log, const std::string& channel, const Msg& msg, int64_t utime) {
+  std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
+  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  lcm::LogEvent ev{};
+  ev.timestamp = utime;
+  ev.channel = channel;
+  ev.datalen = static_cast<int32_t>(buf.size());
+  ev.data = buf.data();
+  log.writeEvent(&ev);
+}
+
 class Io : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -109,16 +122,6 @@ TEST_F(Io, LcmLogReadsBack) {
   {
     lcm::LogFile log(path, "w");
     ASSERT_TRUE(log.good());
-    auto put = [&](const std::string& ch, auto& msg, int64_t utime) {
-      std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-      msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
-      lcm::LogEvent ev{};
-      ev.timestamp = utime;
-      ev.channel = ch;
-      ev.datalen = static_cast<int32_t>(buf.size());
-      ev.data = buf.data();
-      log.writeEvent(&ev);
-    };
     for (int k = 0; k < 5; ++k) {
       kincal::controls_t c{};
       c.schema_version = 1;
@@ -127,13 +130,13 @@ TEST_F(Io, LcmLogReadsBack) {
       c.num_controls = 2;
       c.names = {"omega", "v"};
       c.values = {0.1 * k, 0.5};
-      put("KINCAL_CONTROLS", c, c.utime);
+      PutMessage(log, "KINCAL_CONTROLS", c, c.utime);
       kincal::pose_t p{};
       p.schema_version = 1;
       p.utime = 1'000'000 + k * 100'000 + 50'000;
       p.x = 0.05 * k;
       p.valid = 1;
-      put("KINCAL_POSE", p, p.utime);
+      PutMessage(log, "KINCAL_POSE", p, p.utime);
     }
   }
   const Recording r = ReadLcmLog(path, *MakeModel("unicycle"));
@@ -255,17 +258,8 @@ TEST_F(Io, DamagedLcmLogIsReadWithWarnings) {
       p.schema_version = 1;
       p.utime = c.utime + 50'000;
       p.valid = 1;
-      for (int j = 0; j < 2; ++j) {
-        std::vector<uint8_t> buf(static_cast<size_t>(j == 0 ? c.getEncodedSize() : p.getEncodedSize()));
-        if (j == 0) c.encode(buf.data(), 0, static_cast<int>(buf.size()));
-        else p.encode(buf.data(), 0, static_cast<int>(buf.size()));
-        lcm::LogEvent ev{};
-        ev.timestamp = c.utime;
-        ev.channel = j == 0 ? "KINCAL_CONTROLS" : "KINCAL_POSE";
-        ev.datalen = static_cast<int32_t>(buf.size());
-        ev.data = buf.data();
-        log.writeEvent(&ev);
-      }
+      PutMessage(log, "KINCAL_CONTROLS", c, c.utime);
+      PutMessage(log, "KINCAL_POSE", p, c.utime);
     }
   }
   std::ifstream in(path, std::ios::binary);
