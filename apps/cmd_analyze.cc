@@ -19,14 +19,16 @@ std::map<std::string, double> ParseInit(const std::string& text) {
   std::string item;
   while (std::getline(in, item, ',')) {
     const auto eq = item.find('=');
-    if (eq == std::string::npos) throw std::runtime_error("--init: expected name=value, got '" + item + "'");
+    if (eq == std::string::npos)
+      throw std::runtime_error("--init: expected name=value, got '" + item + "'");
     try {
       size_t used = 0;
       const double v = std::stod(item.substr(eq + 1), &used);
       if (used != item.size() - eq - 1) throw std::invalid_argument("trailing text");
       out[item.substr(0, eq)] = v;
     } catch (const std::exception&) {
-      throw std::runtime_error("--init: '" + item.substr(eq + 1) + "' is not a number (in '" + item + "')");
+      throw std::runtime_error("--init: '" + item.substr(eq + 1) + "' is not a number (in '" +
+                               item + "')");
     }
   }
   return out;
@@ -34,8 +36,10 @@ std::map<std::string, double> ParseInit(const std::string& text) {
 
 // Finds scripts/plot_analysis.py: $KINCAL_SCRIPTS, the source tree, or the install tree.
 std::string PlotScript() {
-  if (const char* env = std::getenv("KINCAL_SCRIPTS")) return std::string(env) + "/plot_analysis.py";
-  for (const std::string& dir : {std::string(KINCAL_SOURCE_DIR) + "/scripts", std::string(KINCAL_INSTALL_DATADIR) + "/scripts"}) {
+  if (const char* env = std::getenv("KINCAL_SCRIPTS"))
+    return std::string(env) + "/plot_analysis.py";
+  for (const std::string& dir : {std::string(KINCAL_SOURCE_DIR) + "/scripts",
+                                 std::string(KINCAL_INSTALL_DATADIR) + "/scripts"}) {
     if (std::filesystem::exists(dir + "/plot_analysis.py")) return dir + "/plot_analysis.py";
   }
   return {};
@@ -63,11 +67,16 @@ Command AddAnalyze(CLI::App& app) {
   app.add_option("--robot", a->robot, "MR.CLAM robot number");
   app.add_option("--out", a->out, "output directory")->required();
   app.add_option("--init", a->init, "initial guesses, name=value,...");
-  app.add_option("--effects", a->effects, "auto | none | effect,effect[channel],...")->capture_default_str();
-  app.add_option("--fit-fraction", a->opt.fit_fraction, "fraction of the span used for fitting")->capture_default_str();
-  app.add_option("--horizon", a->opt.horizon_s, "open-loop prediction horizon, s")->capture_default_str();
-  app.add_option("--pose-sigma", a->pose_sigma, "pose noise 'pos_m,heading_rad' (default: estimated)");
-  app.add_option("--max-effects", a->opt.max_effects, "at most this many effects")->capture_default_str();
+  app.add_option("--effects", a->effects, "auto | none | effect,effect[channel],...")
+      ->capture_default_str();
+  app.add_option("--fit-fraction", a->opt.fit_fraction, "fraction of the span used for fitting")
+      ->capture_default_str();
+  app.add_option("--horizon", a->opt.horizon_s, "open-loop prediction horizon, s")
+      ->capture_default_str();
+  app.add_option("--pose-sigma", a->pose_sigma,
+                 "pose noise 'pos_m,heading_rad' (default: estimated)");
+  app.add_option("--max-effects", a->opt.max_effects, "at most this many effects")
+      ->capture_default_str();
   app.add_option("--threads", a->opt.num_threads, "solver threads")->capture_default_str();
   return [a]() -> int {
     AnalyzeOptions o = a->opt;
@@ -97,20 +106,26 @@ Command AddAnalyze(CLI::App& app) {
     }
     if (!a->pose_sigma.empty()) {
       const auto comma = a->pose_sigma.find(',');
-      if (comma == std::string::npos) throw std::runtime_error("--pose-sigma: expected 'pos_m,heading_rad'");
-      o.pose_sigma = Eigen::Vector2d(std::stod(a->pose_sigma.substr(0, comma)), std::stod(a->pose_sigma.substr(comma + 1)));
+      if (comma == std::string::npos)
+        throw std::runtime_error("--pose-sigma: expected 'pos_m,heading_rad'");
+      o.pose_sigma = Eigen::Vector2d(std::stod(a->pose_sigma.substr(0, comma)),
+                                     std::stod(a->pose_sigma.substr(comma + 1)));
     }
     const auto model = MakeModel(o.model);
     Recording rec;
-    const int sources = !a->mrclam.empty() + !a->log.empty() + (!a->controls.empty() || !a->poses.empty());
-    if (sources != 1) throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
+    const int sources =
+        !a->mrclam.empty() + !a->log.empty() + (!a->controls.empty() || !a->poses.empty());
+    if (sources != 1)
+      throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
     if (!a->mrclam.empty()) {
-      if (o.model != "unicycle") throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
+      if (o.model != "unicycle")
+        throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
       rec = ReadMrclam(a->mrclam, a->robot);
     } else if (!a->log.empty()) {
       rec = ReadLcmLog(a->log, *model);
     } else {
-      if (a->controls.empty() || a->poses.empty()) throw std::runtime_error("--controls and --poses go together");
+      if (a->controls.empty() || a->poses.empty())
+        throw std::runtime_error("--controls and --poses go together");
       rec = ReadCsvRecording(a->controls, a->poses, *model);
     }
     std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
@@ -123,12 +138,13 @@ Command AddAnalyze(CLI::App& app) {
       if (tty) {
         std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#')
                   << std::string(static_cast<size_t>(width - filled), ' ') << "] " << std::setw(3)
-                  << static_cast<int>(f * 100) << "% " << std::left << std::setw(40) << stage.substr(0, 40)
-                  << std::right << std::flush;
+                  << static_cast<int>(f * 100) << "% " << std::left << std::setw(40)
+                  << stage.substr(0, 40) << std::right << std::flush;
         if (f >= 1.0) std::cerr << "\n";
       } else {
         static std::string last;
-        if (stage.substr(0, 8) != last.substr(0, 8)) std::cerr << "[" << static_cast<int>(f * 100) << "%] " << stage << "\n";
+        if (stage.substr(0, 8) != last.substr(0, 8))
+          std::cerr << "[" << static_cast<int>(f * 100) << "%] " << stage << "\n";
         last = stage;
       }
     };
@@ -144,25 +160,29 @@ Command AddAnalyze(CLI::App& app) {
     }
     std::cout << std::setprecision(4);
     std::cout << "\nmodel " << r.model << ", residual weights " << r.pose_sigma[0] << " m / "
-              << r.pose_sigma[1] << " rad" << (r.pose_sigma_estimated ? " (estimated)" : "") << "\n";
-    std::cout << std::left << std::setw(28) << "" << std::setw(16) << "before" << "after\n";
+              << r.pose_sigma[1] << " rad" << (r.pose_sigma_estimated ? " (estimated)" : "")
+              << "\n";
+    std::cout << std::left << std::setw(28) << "" << std::setw(16) << "before"
+              << "after\n";
     auto row = [](const std::string& n, double b, double af) {
       std::cout << std::left << std::setw(28) << n << std::setw(16) << b << af << "\n";
     };
     row("fit position RMS [m]", r.before.fit.pos_rms_m, r.after.fit.pos_rms_m);
     row("fit heading RMS [rad]", r.before.fit.heading_rms_rad, r.after.fit.heading_rms_rad);
     row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
-    row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad, r.after.heldout.heading_rms_rad);
+    row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
+        r.after.heldout.heading_rms_rad);
     std::cout << std::right << "parameters after:\n";
     for (const auto& p : r.after.params) {
-      std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12) << p.value
-                << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
+      std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12)
+                << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
     }
     std::cout << "effects accepted:";
     for (const auto& e : r.after.effects) std::cout << " " << e;
     if (r.after.effects.empty()) std::cout << " none";
     std::cout << "\n";
-    if (!r.before.unique) std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
+    if (!r.before.unique)
+      std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
     for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
     std::cout << "wrote " << a->out << "/report.json, report.html, residuals.csv\n";
     return 0;

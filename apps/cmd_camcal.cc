@@ -18,12 +18,14 @@
 namespace kincal::app {
 namespace {
 
-std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, const Board& b, int* w, int* h) {
+std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, const Board& b, int* w,
+                                                     int* h) {
   std::vector<std::filesystem::path> files;
   if (!std::filesystem::is_directory(dir)) throw std::runtime_error(dir + ": not a directory");
   for (const auto& e : std::filesystem::directory_iterator(dir)) {
     const auto ext = e.path().extension().string();
-    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm") files.push_back(e.path());
+    if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm")
+      files.push_back(e.path());
   }
   std::sort(files.begin(), files.end());
   std::vector<vision::CalibrationView> views;
@@ -34,17 +36,23 @@ std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, con
       *w = img.cols;
       *h = img.rows;
     } else if (img.cols != *w || img.rows != *h) {
-      throw std::runtime_error(f.string() + ": image size " + std::to_string(img.cols) + "x" + std::to_string(img.rows) +
-                               " differs from the first image's " + std::to_string(*w) + "x" + std::to_string(*h));
+      throw std::runtime_error(f.string() + ": image size " + std::to_string(img.cols) + "x" +
+                               std::to_string(img.rows) + " differs from the first image's " +
+                               std::to_string(*w) + "x" + std::to_string(*h));
     }
     std::vector<cv::Point2f> corners;
     const cv::Size size(b.cols, b.rows);
     bool found = false;
     if (b.kind == "chessboard") {
-      found = cv::findChessboardCorners(img, size, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
-      if (found) cv::cornerSubPix(img, corners, {5, 5}, {-1, -1}, {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4});
+      found = cv::findChessboardCorners(
+          img, size, corners, cv::CALIB_CB_ADAPTIVE_THRESH | cv::CALIB_CB_NORMALIZE_IMAGE);
+      if (found)
+        cv::cornerSubPix(img, corners, {5, 5}, {-1, -1},
+                         {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4});
     } else {
-      found = cv::findCirclesGrid(img, size, corners, b.kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
+      found = cv::findCirclesGrid(
+          img, size, corners,
+          b.kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
     }
     if (!found) {
       std::cerr << "warning: " << f.string() << ": board not found, skipped\n";
@@ -68,7 +76,8 @@ Command AddCamcal(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   app.add_option("--images", a->images, "folder of board images");
-  app.add_option("--board", a->board, "KIND:COLSxROWS:PITCH (chessboard, circles, acircles; metres)");
+  app.add_option("--board", a->board,
+                 "KIND:COLSxROWS:PITCH (chessboard, circles, acircles; metres)");
   app.add_option("--points", a->points, "points file, header view,X,Y,Z,u,v");
   app.add_option("--image-size", a->size, "WxH (with --points)");
   app.add_option("--out", a->out, "OpenCV FileStorage YAML to write")->required();
@@ -78,11 +87,14 @@ Command AddCamcal(CLI::App& app) {
     std::vector<vision::CalibrationView> views;
     vision::CalibrationOptions opt;
     opt.use_k3 = a->k3;
-    if (!a->points.empty() == !a->images.empty()) throw std::runtime_error("give either --images (with --board) or --points (with --image-size)");
+    if (!a->points.empty() == !a->images.empty())
+      throw std::runtime_error(
+          "give either --images (with --board) or --points (with --image-size)");
     if (!a->points.empty()) {
       static const std::regex re(R"((\d+)x(\d+))");
       std::smatch m;
-      if (!std::regex_match(a->size, m, re)) throw std::runtime_error("--image-size '" + a->size + "': expected WxH, e.g. 640x480");
+      if (!std::regex_match(a->size, m, re))
+        throw std::runtime_error("--image-size '" + a->size + "': expected WxH, e.g. 640x480");
       opt.width = std::stoi(m[1]);
       opt.height = std::stoi(m[2]);
       views = vision::ReadCalibrationPoints(a->points);
@@ -97,15 +109,20 @@ Command AddCamcal(CLI::App& app) {
     const double cv_rms = cv_result.rms_px;
     const auto& c = cv_result.camera;
     const char* names[9] = {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"};
-    const double ours[9] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2, r.camera.k3};
+    const double ours[9] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1,
+                            r.camera.k2, r.camera.p1, r.camera.p2, r.camera.k3};
     const double theirs[9] = {c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.p1, c.p2, c.k3};
     const int np = a->k3 ? 9 : 8;
     std::cout << std::setprecision(6) << views.size() << " views, " << r.points << " points\n"
-              << std::setw(6) << "" << std::setw(16) << "kincal" << std::setw(14) << "1-sigma" << std::setw(16) << "cv::calibrate" << "\n";
+              << std::setw(6) << "" << std::setw(16) << "kincal" << std::setw(14) << "1-sigma"
+              << std::setw(16) << "cv::calibrate"
+              << "\n";
     for (int i = 0; i < np; ++i) {
-      std::cout << std::setw(6) << names[i] << std::setw(16) << ours[i] << std::setw(14) << r.sigma[i] << std::setw(16) << theirs[i] << "\n";
+      std::cout << std::setw(6) << names[i] << std::setw(16) << ours[i] << std::setw(14)
+                << r.sigma[i] << std::setw(16) << theirs[i] << "\n";
     }
-    std::cout << std::setw(6) << "rms" << std::setw(16) << r.rms_px << std::setw(14) << "" << std::setw(16) << cv_rms << "  px\n";
+    std::cout << std::setw(6) << "rms" << std::setw(16) << r.rms_px << std::setw(14) << ""
+              << std::setw(16) << cv_rms << "  px\n";
     std::cout << "wrote " << a->out << "\n";
     if (!a->json.empty()) {
       nlohmann::json j, s, o;

@@ -1,15 +1,15 @@
 // kincal export: the calibrated parameters with their sigma (and covariance) as YAML a
 // robot's configuration can include, from a kincald checkpoint or the last
 // kincal.params_t in an LCM log.
-#include <kincal/params_t.hpp>
 #include <sys/stat.h>
 
 #include <fstream>
 #include <iostream>
+#include <kincal/params_t.hpp>
 
 #include "commands.h"
 #include "kincal/daemon/checkpoint.h"
-#include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 
 namespace kincal::app {
@@ -43,17 +43,20 @@ Command AddExport(CLI::App& app) {
         if (ev->channel != a->channel) continue;
         kincal::params_t m;
         std::string why;
-        if (!daemon::PlausibleParams(ev->data.data(), ev->data.size(), 1000, &why) ||
-            m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 || m.num_params < 0 ||
-            m.covariance.size() != static_cast<size_t>(m.num_params)) {
+        if (!PlausibleParams(ev->data.data(), ev->data.size(), 1000, &why) ||
+            m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 ||
+            m.num_params < 0 || m.covariance.size() != static_cast<size_t>(m.num_params)) {
           ++bad;
           continue;
         }
         last = std::move(m);
         found = true;
       }
-      if (!found) throw std::runtime_error(a->log + ": no kincal.params_t on channel " + a->channel);
-      if (bad > 0) std::cerr << "kincal export: " << bad << " undecodable events on " << a->channel << " skipped\n";
+      if (!found)
+        throw std::runtime_error(a->log + ": no kincal.params_t on channel " + a->channel);
+      if (bad > 0)
+        std::cerr << "kincal export: " << bad << " undecodable events on " << a->channel
+                  << " skipped\n";
       for (const auto& p : file.problems()) std::cerr << "kincal export: " << p << "\n";
       c.model = last.model;
       c.filter = last.estimator;
@@ -65,7 +68,8 @@ Command AddExport(CLI::App& app) {
       const int n = last.num_params;
       c.covariance.resize(n, n);
       for (int i = 0; i < n; ++i)
-        for (int k = 0; k < n; ++k) c.covariance(i, k) = last.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
+        for (int k = 0; k < n; ++k)
+          c.covariance(i, k) = last.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
       source = a->log + " (" + a->channel + ")";
     } else {
       throw std::runtime_error("give --checkpoint FILE or --log FILE");

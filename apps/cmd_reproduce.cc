@@ -45,24 +45,28 @@ Command AddReproduce(CLI::App& app) {
     for (const auto& [name, v] : r.joint_nnde_percent) {
       const auto& e = r.joint_estimate.at(name);
       const auto& s = r.joint_sigma.at(name);
-      std::cout << "    " << std::setw(6) << name << "  " << std::setw(10) << v
-                << std::fixed << std::setprecision(5) << "   R_L " << e[0] * 1e3 << " +- " << s[0] * 1e3 << " mm, R_R " << e[1] * 1e3
-                << " +- " << s[1] * 1e3 << " mm, D " << e[2] * 1e3 << " +- " << s[2] * 1e3
-                << " mm\n" << std::defaultfloat << std::setprecision(4);
+      std::cout << "    " << std::setw(6) << name << "  " << std::setw(10) << v << std::fixed
+                << std::setprecision(5) << "   R_L " << e[0] * 1e3 << " +- " << s[0] * 1e3
+                << " mm, R_R " << e[1] * 1e3 << " +- " << s[1] * 1e3 << " mm, D " << e[2] * 1e3
+                << " +- " << s[2] * 1e3 << " mm\n"
+                << std::defaultfloat << std::setprecision(4);
     }
-    std::cout << "    " << std::setw(6) << "bound" << "  " << std::setw(10)
-              << r.joint_bound_nnde_percent << "   (Bayesian Cramer-Rao)\n";
-    std::cout << "    " << std::setw(6) << "thesis" << "  " << std::setw(10)
-              << r.thesis_nnde_percent << "   (NNDE of the mean of Table 6-5)\n\n";
+    std::cout << "    " << std::setw(6) << "bound"
+              << "  " << std::setw(10) << r.joint_bound_nnde_percent
+              << "   (Bayesian Cramer-Rao)\n";
+    std::cout << "    " << std::setw(6) << "thesis"
+              << "  " << std::setw(10) << r.thesis_nnde_percent
+              << "   (NNDE of the mean of Table 6-5)\n\n";
     if (!r.per_run_nnde_percent.empty()) {
       std::cout << "  Per experiment (one filter per run, prior-dependent; mean NNDE %):\n";
       for (const auto& [name, v] : r.per_run_nnde_percent) {
         std::cout << "    " << std::setw(6) << name << "  " << std::setw(10) << v << "\n";
       }
-      std::cout << "    " << std::setw(6) << "bound" << "  " << std::setw(10)
-                << r.per_run_bound_nnde_percent << "\n";
-      std::cout << "    " << std::setw(6) << "thesis" << "  " << std::setw(10)
-                << r.thesis_per_run_nnde_percent << "   (mean over Table 6-5 rows)\n";
+      std::cout << "    " << std::setw(6) << "bound"
+                << "  " << std::setw(10) << r.per_run_bound_nnde_percent << "\n";
+      std::cout << "    " << std::setw(6) << "thesis"
+                << "  " << std::setw(10) << r.thesis_per_run_nnde_percent
+                << "   (mean over Table 6-5 rows)\n";
     }
     const double dd2 = r.joint_nnde_percent.count("dd2") ? r.joint_nnde_percent.at("dd2") : NAN;
     std::cout << "\n  target: joint DD2 NNDE <= 0.1 % and <= 1.2 x bound: "

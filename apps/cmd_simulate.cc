@@ -82,11 +82,13 @@ Command AddSimulate(CLI::App& app) {
       c << "\n" << std::setprecision(10);
       for (size_t i = 0; i < cmd.size(); ++i) {
         c << cmd.TimeAt(static_cast<int>(i));
-        for (int k = 0; k < nc; ++k) c << "," << cmd.ValuesAt(static_cast<int>(i))[static_cast<size_t>(k)];
+        for (int k = 0; k < nc; ++k)
+          c << "," << cmd.ValuesAt(static_cast<int>(i))[static_cast<size_t>(k)];
         c << "\n";
       }
       p << "t,x,y,theta\n" << std::setprecision(10);
-      for (const auto& m : meas) p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
+      for (const auto& m : meas)
+        p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
       std::cout << "wrote " << args->export_dir << "/controls.csv and poses.csv\n";
     }
     OnlineCalibratorOptions opt;
@@ -97,8 +99,9 @@ Command AddSimulate(CLI::App& app) {
     const int np = est_sys.num_params();
     StateMat P0 = StateMat::Zero(np, np);
     for (int i = 0; i < np; ++i) {
-      const double s = sc.guess_sigma_fraction *
-                       std::max(std::abs(p_guess[i]), est_sys.params()[static_cast<size_t>(i)].default_sigma);
+      const double s =
+          sc.guess_sigma_fraction *
+          std::max(std::abs(p_guess[i]), est_sys.params()[static_cast<size_t>(i)].default_sigma);
       P0(i, i) = s * s;
     }
     cal.Initialize(meas.front().t_ns, meas.front().z, R, p_guess, P0);
@@ -113,16 +116,17 @@ Command AddSimulate(CLI::App& app) {
       const int j = truth_sys.ParamIndex(est_sys.params()[static_cast<size_t>(i)].name);
       return j < 0 ? NAN : p_true[j];
     };
-    std::cout << "Simulated " << sc.model << " (" << sc.profile << " controls, "
-              << sc.duration_s << " s, " << meas.size() << " poses at " << sc.camera.rate_hz
-              << " Hz), filter " << sc.filter << ", seed " << sc.seed << "\n";
+    std::cout << "Simulated " << sc.model << " (" << sc.profile << " controls, " << sc.duration_s
+              << " s, " << meas.size() << " poses at " << sc.camera.rate_hz << " Hz), filter "
+              << sc.filter << ", seed " << sc.seed << "\n";
     if (!sc.hidden_effects.empty()) {
       std::cout << "hidden effects (not modelled by the estimator):";
       for (const auto& e : sc.hidden_effects) std::cout << " " << e;
       std::cout << "\n";
     }
     std::cout << std::setw(8) << "t [s]";
-    for (const auto& p : est_sys.params()) std::cout << std::setw(26) << (p.name + " [" + p.unit + "]");
+    for (const auto& p : est_sys.params())
+      std::cout << std::setw(26) << (p.name + " [" + p.unit + "]");
     std::cout << "\n" << std::setprecision(5);
     double next_report = 0.0;
     auto report = [&](double t) {

@@ -1,5 +1,7 @@
 // kincal target / detect / floorcal: a printable target, a look at what the detector
 // finds, and the camera's pose above the floor.
+#include <yaml-cpp/yaml.h>
+
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -7,7 +9,6 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-#include <yaml-cpp/yaml.h>
 
 #include "board.h"
 #include "commands.h"
@@ -18,7 +19,9 @@
 namespace kincal::app {
 namespace {
 
-vision::TargetLayout LoadLayout(const std::string& path) { return vision::ReadTargetLayoutYaml(path); }
+vision::TargetLayout LoadLayout(const std::string& path) {
+  return vision::ReadTargetLayoutYaml(path);
+}
 
 }  // namespace
 
@@ -36,22 +39,24 @@ Command AddTarget(CLI::App& app) {
     std::ofstream f(*out);
     if (!f) throw std::runtime_error(*out + ": cannot write");
     // Drawn seen from above: target x (forward) to the right, target y (left) up.
-    f << std::setprecision(6) << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w << "mm' height='" << h
-      << "mm' viewBox='0 0 " << w << " " << h << "'>\n<rect width='" << w << "' height='" << h
-      << "' fill='white' stroke='black' stroke-width='0.2'/>\n";
+    f << std::setprecision(6) << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w
+      << "mm' height='" << h << "mm' viewBox='0 0 " << w << " " << h << "'>\n<rect width='" << w
+      << "' height='" << h << "' fill='white' stroke='black' stroke-width='0.2'/>\n";
     for (size_t i = 0; i < layout.markers.size(); ++i) {
       const auto& m = layout.markers[i];
       const double cx = (m.x() - x0 + pad) * 1e3, cy = (y1 - m.y() + pad) * 1e3;
-      f << "<circle cx='" << cx << "' cy='" << cy << "' r='" << layout.marker_radius_m * 1e3 << "' fill='black'/>\n"
-        << "<text x='" << cx << "' y='" << cy + layout.marker_radius_m * 1e3 + 4 << "' font-size='3' text-anchor='middle'>M"
-        << i + 1 << "</text>\n";
+      f << "<circle cx='" << cx << "' cy='" << cy << "' r='" << layout.marker_radius_m * 1e3
+        << "' fill='black'/>\n"
+        << "<text x='" << cx << "' y='" << cy + layout.marker_radius_m * 1e3 + 4
+        << "' font-size='3' text-anchor='middle'>M" << i + 1 << "</text>\n";
     }
     const double ox = (0 - x0 + pad) * 1e3, oy = (y1 - 0 + pad) * 1e3;
     f << "<path d='M" << ox << " " << oy << " h12 M" << ox << " " << oy
       << " v-12' stroke='red' stroke-width='0.4'/>\n<text x='" << ox + 13 << "' y='" << oy + 1
       << "' font-size='3' fill='red'>x</text><text x='" << ox - 1 << "' y='" << oy - 13
-      << "' font-size='3' fill='red'>y</text>\n<text x='2' y='" << h - 2 << "' font-size='2.5'>kincal target '"
-      << layout.name << "', markers " << layout.marker_radius_m * 2e3 << " mm, print at 100 %</text>\n</svg>\n";
+      << "' font-size='3' fill='red'>y</text>\n<text x='2' y='" << h - 2
+      << "' font-size='2.5'>kincal target '" << layout.name << "', markers "
+      << layout.marker_radius_m * 2e3 << " mm, print at 100 %</text>\n</svg>\n";
     std::cout << "wrote " << *out << " (" << w << " x " << h << " mm)\n";
     return 0;
   };
@@ -65,16 +70,19 @@ Command AddRender(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   app.add_option("--out", a->out, "PNG to write")->required();
-  app.add_option("--tilt", a->tilt, "with --board: tilt of the board about its x axis, rad (calibration views)");
+  app.add_option("--tilt", a->tilt,
+                 "with --board: tilt of the board about its x axis, rad (calibration views)");
   app.add_option("--intrinsics", a->intrinsics, "camera YAML (default: 640x480, f = 820 px)");
   app.add_option("--x", a->x, "target x on the floor, m");
   app.add_option("--y", a->y, "target y on the floor, m");
   app.add_option("--theta", a->theta, "target heading, rad");
-  app.add_option("--camera-height", a->height, "nadir camera height above the floor, m")->capture_default_str();
+  app.add_option("--camera-height", a->height, "nadir camera height above the floor, m")
+      ->capture_default_str();
   app.add_option("--noise", a->noise, "image noise, grey levels")->capture_default_str();
   app.add_option("--seed", a->seed, "noise seed")->capture_default_str();
-  app.add_option("--board", a->board,
-                 "render a board lying on the floor instead: chessboard|circles|acircles:COLSxROWS:PITCH");
+  app.add_option(
+      "--board", a->board,
+      "render a board lying on the floor instead: chessboard|circles|acircles:COLSxROWS:PITCH");
   app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
   app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
   return [a]() -> int {
@@ -89,7 +97,8 @@ Command AddRender(CLI::App& app) {
       cam.cy = 239.5;
     }
     // Nadir camera: camera x = floor x, camera y = -floor y, camera z = -floor z.
-    const Eigen::Matrix3d R_cf = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
+    const Eigen::Matrix3d R_cf =
+        Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
     const Eigen::Vector3d t_cf(0, 0, a->height);
     vision::Pose3 pose;
     pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -111,7 +120,8 @@ Command AddRender(CLI::App& app) {
     if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
     if (!a->board.empty() && Board::Parse(a->board).kind == "chessboard") {
       const Board board = Board::Parse(a->board);
-      const auto fr = vision::RenderChessboard(cam, pose, board.cols, board.rows, board.pitch, ro, rng);
+      const auto fr =
+          vision::RenderChessboard(cam, pose, board.cols, board.rows, board.pitch, ro, rng);
       if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
       return 0;
     }
@@ -119,7 +129,8 @@ Command AddRender(CLI::App& app) {
     if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
     std::cout << std::fixed << std::setprecision(4);
     for (size_t i = 0; i < fr.centres.size() && a->board.empty(); ++i) {
-      std::cout << "M" << i + 1 << " true centre (" << fr.centres[i].x() << ", " << fr.centres[i].y() << ") px\n";
+      std::cout << "M" << i + 1 << " true centre (" << fr.centres[i].x() << ", "
+                << fr.centres[i].y() << ") px\n";
     }
     return 0;
   };
@@ -153,8 +164,9 @@ Command AddDetect(CLI::App& app) {
     if (!a->intrinsics.empty()) {
       const auto cam = vision::ReadCameraYaml(a->intrinsics);
       if (cam.width != grey.cols || cam.height != grey.rows) {
-        throw std::runtime_error(a->image + ": image is " + std::to_string(grey.cols) + "x" + std::to_string(grey.rows) +
-                                 " but " + a->intrinsics + " is for " + std::to_string(cam.width) + "x" + std::to_string(cam.height));
+        throw std::runtime_error(a->image + ": image is " + std::to_string(grey.cols) + "x" +
+                                 std::to_string(grey.rows) + " but " + a->intrinsics + " is for " +
+                                 std::to_string(cam.width) + "x" + std::to_string(cam.height));
       }
       if (vision::IdentifyTarget(cam, layout, &markers)) {
         std::vector<Eigen::Vector3d> obj;
@@ -169,29 +181,39 @@ Command AddDetect(CLI::App& app) {
         if (vision::PlanarInitialPose(obj, norm, &init)) {
           const auto r = vision::LowePose(obj, norm, init, cam.fx, 0.02);
           std::ostringstream s;
-          s << std::setprecision(4) << "t = [" << r.pose.t.transpose() << "] m, rms " << r.rms_px << " px";
+          s << std::setprecision(4) << "t = [" << r.pose.t.transpose() << "] m, rms " << r.rms_px
+            << " px";
           pose_text = s.str();
         }
       }
     }
     for (const auto& m : markers) {
       const cv::Point2d c(m.centre_px.x(), m.centre_px.y());
-      cv::circle(vis, c, static_cast<int>(std::lround(m.diameter_px / 2)), {0, 200, 0}, 1, cv::LINE_AA);
+      cv::circle(vis, c, static_cast<int>(std::lround(m.diameter_px / 2)), {0, 200, 0}, 1,
+                 cv::LINE_AA);
       cv::drawMarker(vis, c, {0, 0, 255}, cv::MARKER_CROSS, 6);
-      if (m.id >= 0) cv::putText(vis, "M" + std::to_string(m.id + 1), c + cv::Point2d(8, -8), cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 200, 0});
-      std::cout << std::fixed << std::setprecision(3) << "marker " << (m.id >= 0 ? "M" + std::to_string(m.id + 1) : "?")
-                << " centre (" << m.centre_px.x() << ", " << m.centre_px.y() << ") px, diameter " << m.diameter_px << " px\n";
+      if (m.id >= 0)
+        cv::putText(vis, "M" + std::to_string(m.id + 1), c + cv::Point2d(8, -8),
+                    cv::FONT_HERSHEY_SIMPLEX, 0.4, {0, 200, 0});
+      std::cout << std::fixed << std::setprecision(3) << "marker "
+                << (m.id >= 0 ? "M" + std::to_string(m.id + 1) : "?") << " centre ("
+                << m.centre_px.x() << ", " << m.centre_px.y() << ") px, diameter " << m.diameter_px
+                << " px\n";
     }
     for (const auto& r : rejected) {
-      cv::drawMarker(vis, cv::Point2d(r.centre_px.x(), r.centre_px.y()), {0, 140, 255}, cv::MARKER_TILTED_CROSS, 6);
-      cv::putText(vis, r.reason, cv::Point2d(r.centre_px.x() + 6, r.centre_px.y() + 12), cv::FONT_HERSHEY_SIMPLEX, 0.3, {0, 140, 255});
-      std::cout << "rejected blob at (" << r.centre_px.x() << ", " << r.centre_px.y() << "): " << r.reason << "\n";
+      cv::drawMarker(vis, cv::Point2d(r.centre_px.x(), r.centre_px.y()), {0, 140, 255},
+                     cv::MARKER_TILTED_CROSS, 6);
+      cv::putText(vis, r.reason, cv::Point2d(r.centre_px.x() + 6, r.centre_px.y() + 12),
+                  cv::FONT_HERSHEY_SIMPLEX, 0.3, {0, 140, 255});
+      std::cout << "rejected blob at (" << r.centre_px.x() << ", " << r.centre_px.y()
+                << "): " << r.reason << "\n";
     }
     if (!pose_text.empty()) {
       cv::putText(vis, pose_text, {8, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {255, 80, 0});
       std::cout << "pose: " << pose_text << "\n";
     }
-    if (!a->overlay.empty() && !cv::imwrite(a->overlay, vis)) throw std::runtime_error(a->overlay + ": cannot write");
+    if (!a->overlay.empty() && !cv::imwrite(a->overlay, vis))
+      throw std::runtime_error(a->overlay + ": cannot write");
     return markers.empty() ? 1 : 0;
   };
 }
@@ -202,9 +224,11 @@ Command AddFloorcal(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   app.add_option("--image", a->image, "image of a board lying on the floor")->required();
-  app.add_option("--board", a->board, "KIND:COLSxROWS:PITCH (chessboard, circles, acircles)")->required();
+  app.add_option("--board", a->board, "KIND:COLSxROWS:PITCH (chessboard, circles, acircles)")
+      ->required();
   app.add_option("--intrinsics", a->intrinsics, "camera YAML")->required();
-  app.add_option("--out", a->out, "YAML with the floor extrinsics and their covariance")->required();
+  app.add_option("--out", a->out, "YAML with the floor extrinsics and their covariance")
+      ->required();
   return [a]() -> int {
     const Board board = Board::Parse(a->board);
     const std::string& kind = board.kind;
@@ -212,24 +236,31 @@ Command AddFloorcal(CLI::App& app) {
     const auto cam = vision::ReadCameraYaml(a->intrinsics);
     const cv::Mat img = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
     if (img.empty()) throw std::runtime_error(a->image + ": unreadable image");
-    if (img.cols != cam.width || img.rows != cam.height) throw std::runtime_error(a->image + ": size differs from the intrinsics' image size");
+    if (img.cols != cam.width || img.rows != cam.height)
+      throw std::runtime_error(a->image + ": size differs from the intrinsics' image size");
     std::vector<cv::Point2f> pts;
     bool found;
     if (kind == "chessboard") {
       found = cv::findChessboardCorners(img, {cols, rows}, pts);
-      if (found) cv::cornerSubPix(img, pts, {5, 5}, {-1, -1}, {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4});
+      if (found)
+        cv::cornerSubPix(img, pts, {5, 5}, {-1, -1},
+                         {cv::TermCriteria::EPS + cv::TermCriteria::COUNT, 50, 1e-4});
     } else {
-      found = cv::findCirclesGrid(img, {cols, rows}, pts, kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
+      found = cv::findCirclesGrid(
+          img, {cols, rows}, pts,
+          kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
     }
     if (!found) throw std::runtime_error(a->image + ": board " + a->board + " not found");
     const std::vector<Eigen::Vector3d> obj = board.Points();
     std::vector<Eigen::Vector2d> norm;
     for (const auto& p : pts) norm.push_back(cam.PixelToNormalized({p.x, p.y}));
     vision::Pose3 init;
-    if (!vision::PlanarInitialPose(obj, norm, &init)) throw std::runtime_error(a->image + ": degenerate board view");
+    if (!vision::PlanarInitialPose(obj, norm, &init))
+      throw std::runtime_error(a->image + ": degenerate board view");
     auto r = vision::LowePose(obj, norm, init, cam.fx, 1.0);
     // Floor frame with z up, towards the camera: flip the board frame if its z points down.
-    if ((-(r.pose.R.transpose() * r.pose.t)).z() < 0) r.pose.R = r.pose.R * Eigen::Vector3d(1, -1, -1).asDiagonal();
+    if ((-(r.pose.R.transpose() * r.pose.t)).z() < 0)
+      r.pose.R = r.pose.R * Eigen::Vector3d(1, -1, -1).asDiagonal();
     // Scale the covariance by the observed reprojection error (sigma = rms).
     const double s2 = std::max(r.rms_px * r.rms_px, 1e-6);
     const Eigen::Matrix<double, 6, 6> cov = r.covariance * s2;
@@ -243,9 +274,11 @@ Command AddFloorcal(CLI::App& app) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C.at<double>(i, j) = cov(i, j);
     fs << "R_cf" << R << "t_cf" << t << "covariance_t_rot" << C << "rms_px" << r.rms_px;
-    std::cout << std::fixed << std::setprecision(4) << "camera height above the floor plane: " << (-(r.pose.R.transpose() * r.pose.t)).z()
-              << " m; t_cf = [" << r.pose.t.transpose() << "] m (1-sigma " << std::sqrt(cov(0, 0)) << ", "
-              << std::sqrt(cov(1, 1)) << ", " << std::sqrt(cov(2, 2)) << "); rms " << r.rms_px << " px\nwrote " << a->out << "\n";
+    std::cout << std::fixed << std::setprecision(4)
+              << "camera height above the floor plane: " << (-(r.pose.R.transpose() * r.pose.t)).z()
+              << " m; t_cf = [" << r.pose.t.transpose() << "] m (1-sigma " << std::sqrt(cov(0, 0))
+              << ", " << std::sqrt(cov(1, 1)) << ", " << std::sqrt(cov(2, 2)) << "); rms "
+              << r.rms_px << " px\nwrote " << a->out << "\n";
     return 0;
   };
 }

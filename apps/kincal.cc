@@ -51,7 +51,8 @@ int main(int argc, char** argv) {
   commands[detect] = kincal::app::AddDetect(*detect);
   auto* floorcal = app.add_subcommand("floorcal", "camera pose above the floor from a board image");
   commands[floorcal] = kincal::app::AddFloorcal(*floorcal);
-  auto* exp = app.add_subcommand("export", "write calibrated parameters (with sigma) as YAML for a robot's config");
+  auto* exp = app.add_subcommand(
+      "export", "write calibrated parameters (with sigma) as YAML for a robot's config");
   commands[exp] = kincal::app::AddExport(*exp);
   try {
     app.parse(argc, argv);

@@ -73,7 +73,13 @@ void BM_AnalyzeVsLength(benchmark::State& state) {
   state.counters["heldout_mm_before"] = 1e3 * r.before.heldout.pos_rms_m;
   state.counters["heldout_mm_after"] = 1e3 * r.after.heldout.pos_rms_m;
 }
-BENCHMARK(BM_AnalyzeVsLength)->Arg(30)->Arg(60)->Arg(120)->Arg(240)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_AnalyzeVsLength)
+    ->Arg(30)
+    ->Arg(60)
+    ->Arg(120)
+    ->Arg(240)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 
 }  // namespace
 }  // namespace kincal

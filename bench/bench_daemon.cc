@@ -9,8 +9,8 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
-#include <thread>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "kincal/daemon/daemon.h"
@@ -28,7 +28,8 @@ DaemonConfig Base() {
 const std::string& Log() {
   static const std::string path = [] {
     spdlog::set_level(spdlog::level::warn);
-    const auto p = std::filesystem::temp_directory_path() / ("kincal_bench_" + std::to_string(::getpid()) + ".lcm");
+    const auto p = std::filesystem::temp_directory_path() /
+                   ("kincal_bench_" + std::to_string(::getpid()) + ".lcm");
     DaemonConfig c = Base();
     c.sim.speed = 0;
     c.sim.duration_s = 20;
@@ -55,7 +56,7 @@ void BM_DaemonReplayFast(benchmark::State& state) {
   double seconds = 0;
   for (auto _ : state) {
     DaemonConfig c = Base();
-    c.source = "replay";
+    c.source = SourceKind::kReplay;
     c.replay.path = log;
     c.replay.speed = 0;
     Daemon d(c);
@@ -75,7 +76,7 @@ void BM_DaemonLatencySpeed1(benchmark::State& state) {
   DaemonCounters c{};
   for (auto _ : state) {
     DaemonConfig cfg = Base();
-    cfg.source = "replay";
+    cfg.source = SourceKind::kReplay;
     cfg.replay.path = log;
     cfg.replay.speed = 1;
     Daemon d(cfg);
@@ -97,14 +98,16 @@ BENCHMARK(BM_DaemonLatencySpeed1)->Unit(benchmark::kMillisecond)->Iterations(1);
 // shares between posix_spawn's clone and its exec.
 void BM_KincaldPeakResidentMemory(benchmark::State& state) {
   const std::string& log = Log();
-  const std::string exe = (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "kincald").string();
+  const std::string exe =
+      (std::filesystem::read_symlink("/proc/self/exe").parent_path() / "kincald").string();
   if (!std::filesystem::exists(exe)) {
     state.SkipWithError("kincald is not built beside kincal_bench");
     return;
   }
   double peak_mb = 0, seconds = 0;
   for (auto _ : state) {
-    std::vector<std::string> args = {exe, "--replay", log, "--fast", "--loop", "5", "--lcm-url", "memq://", "-q"};
+    std::vector<std::string> args = {exe, "--replay",  log,       "--fast", "--loop",
+                                     "5", "--lcm-url", "memq://", "-q"};
     std::vector<char*> argv;
     for (auto& a : args) argv.push_back(a.data());
     argv.push_back(nullptr);
@@ -130,7 +133,10 @@ void BM_KincaldPeakResidentMemory(benchmark::State& state) {
   state.counters["kincald_peak_rss_mb"] = peak_mb;
   state.counters["frames_per_s"] = 3000.0 * static_cast<double>(state.iterations()) / seconds;
 }
-BENCHMARK(BM_KincaldPeakResidentMemory)->Unit(benchmark::kMillisecond)->Iterations(1)->UseRealTime();
+BENCHMARK(BM_KincaldPeakResidentMemory)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace kincal::daemon

@@ -60,7 +60,9 @@ void BM_Propagate(benchmark::State& state, std::string model) {
 void BM_DiffDriveStepVsStateSize(benchmark::State& state) {
   // Cost growth with the augmented state: diffdrive plus effects adding parameters.
   static const std::vector<std::vector<std::string>> kEffects = {
-      {}, {"time_offset"}, {"time_offset", "lever_arm"},
+      {},
+      {"time_offset"},
+      {"time_offset", "lever_arm"},
       {"time_offset", "lever_arm", "lateral_slip", "yaw_rate_bias"}};
   const System sys = MakeSystem("diffdrive", kEffects[static_cast<size_t>(state.range(0))]);
   ControlSignal controls(2, 0);

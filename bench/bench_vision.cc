@@ -2,10 +2,10 @@
 // cv::solvePnP, on synthetic frames measured in the same run.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
-#include <cmath>
 #include <random>
 
 #include "kincal/vision/calibration.h"
@@ -99,7 +99,8 @@ void BM_OpenCvBlobDetectorSolvePnP(benchmark::State& state) {
   auto det = cv::SimpleBlobDetector::create(p);
   std::vector<cv::Point3d> obj;
   for (const auto& o : s.obj) obj.emplace_back(o.x(), o.y(), 0);
-  const cv::Mat K = (cv::Mat_<double>(3, 3) << s.cam.fx, 0, s.cam.cx, 0, s.cam.fy, s.cam.cy, 0, 0, 1);
+  const cv::Mat K =
+      (cv::Mat_<double>(3, 3) << s.cam.fx, 0, s.cam.cx, 0, s.cam.fy, s.cam.cy, 0, 0, 1);
   const cv::Mat D = (cv::Mat_<double>(5, 1) << s.cam.k1, 0, 0, 0, 0);
   for (auto _ : state) {
     std::vector<cv::KeyPoint> kp;
@@ -138,9 +139,11 @@ const std::vector<PoseProblem>& PoseProblems() {
       PoseProblem p;
       const double depth = 0.6 + 0.9 * U(rng), tilt = 0.785 * U(rng), tilt_dir = 2 * M_PI * U(rng);
       const double yaw = 2 * M_PI * U(rng), ux = 2 * U(rng) - 1, uy = 2 * U(rng) - 1;
-      p.truth.R = Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(tilt_dir), std::sin(tilt_dir), 0)).toRotationMatrix() *
-                  Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix() *
-                  Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      p.truth.R =
+          Eigen::AngleAxisd(tilt, Eigen::Vector3d(std::cos(tilt_dir), std::sin(tilt_dir), 0))
+              .toRotationMatrix() *
+          Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix() *
+          Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();
       p.truth.t = Eigen::Vector3d(0.8 * kHalfW * ux * depth, 0.8 * kHalfH * uy * depth, depth);
       bool inside = true;
       for (const auto& m : layout.markers) {
@@ -178,7 +181,8 @@ bool SolveOpenCv(const PoseProblem& p, Pose3* pose) {
     img.emplace_back(p.norm[i].x(), p.norm[i].y());
   }
   cv::Mat rvec, tvec, R;
-  if (!cv::solvePnP(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false, kMethod)) return false;
+  if (!cv::solvePnP(obj, img, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false, kMethod))
+    return false;
   cv::Rodrigues(rvec, R);
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) pose->R(r, c) = R.at<double>(r, c);
@@ -219,8 +223,12 @@ void PoseBenchmark(benchmark::State& state, PoseSolver solve) {
 }
 
 void BM_PoseLowe(benchmark::State& state) { PoseBenchmark(state, SolveLowe); }
-void BM_PoseSolvePnPIterative(benchmark::State& state) { PoseBenchmark(state, SolveOpenCv<cv::SOLVEPNP_ITERATIVE>); }
-void BM_PoseSolvePnPIppe(benchmark::State& state) { PoseBenchmark(state, SolveOpenCv<cv::SOLVEPNP_IPPE>); }
+void BM_PoseSolvePnPIterative(benchmark::State& state) {
+  PoseBenchmark(state, SolveOpenCv<cv::SOLVEPNP_ITERATIVE>);
+}
+void BM_PoseSolvePnPIppe(benchmark::State& state) {
+  PoseBenchmark(state, SolveOpenCv<cv::SOLVEPNP_IPPE>);
+}
 
 // Lowe refining from the previous frame's pose (the tracking case): no homography.
 void BM_LoweFromPreviousPose(benchmark::State& state) {
@@ -237,7 +245,8 @@ void BM_GroundPlane(benchmark::State& state) {
   floor.R_cf = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
   floor.t_cf = Eigen::Vector3d(0, 0, 1.2);
   for (auto _ : state) {
-    benchmark::DoNotOptimize(GroundPlanePose(floor, 0.1, s.obj, s.norm, Eigen::Vector3d(0.04, -0.02, 0.55), s.cam.fx, 0.02));
+    benchmark::DoNotOptimize(GroundPlanePose(floor, 0.1, s.obj, s.norm,
+                                             Eigen::Vector3d(0.04, -0.02, 0.55), s.cam.fx, 0.02));
   }
 }
 
@@ -250,7 +259,9 @@ void BM_DetectVsMarkers(benchmark::State& state) {
   for (int i = 0; i < k; ++i) {
     const int r = i / cols, c = i % cols;
     const double step = 1240.0 / cols;
-    cv::circle(img, cv::Point(static_cast<int>(20 + step * (c + 0.5)) * 16, static_cast<int>(20 + step * (r + 0.5)) * 16),
+    cv::circle(img,
+               cv::Point(static_cast<int>(20 + step * (c + 0.5)) * 16,
+                         static_cast<int>(20 + step * (r + 0.5)) * 16),
                6 * 16, cv::Scalar(40), cv::FILLED, cv::LINE_AA, 4);
   }
   cv::GaussianBlur(img, img, cv::Size(0, 0), 0.6);

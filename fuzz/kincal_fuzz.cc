@@ -11,9 +11,6 @@
 // Expected failures (the readers' documented exceptions) are fine; crashes, sanitizer
 // reports, leaks and hangs are not.
 #include <fcntl.h>
-#include <kincal/frame_t.hpp>
-#include <kincal/params_t.hpp>
-#include <kincal/pose_t.hpp>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -24,14 +21,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <kincal/frame_t.hpp>
+#include <kincal/params_t.hpp>
+#include <kincal/pose_t.hpp>
 #include <string>
 
+#include "daemon/control_input.h"
+#include "daemon/sources.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
-#include "kincal/daemon/control_input.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/lcm_guard.h"
-#include "kincal/daemon/sources.h"
+#include "kincal/io/lcm_guard.h"
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
 #include "kincal/scenario.h"
@@ -69,7 +69,7 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("log.lcm", data, size);
   Expect([&] { kincal::ReadLcmLog(path, Diffdrive()); });
   kincal::daemon::DaemonConfig c;
-  c.source = "replay";
+  c.source = SourceKind::kReplay;
   c.replay.path = path;
   c.replay.speed = 0;
   Expect([&] {
@@ -99,11 +99,11 @@ void FuzzControls(const uint8_t* data, size_t size) {
 
 void FuzzLcmMessages(const uint8_t* data, size_t size) {
   std::string why;
-  if (kincal::daemon::PlausibleParams(data, size, 1000, &why)) {
+  if (kincal::PlausibleParams(data, size, 1000, &why)) {
     kincal::params_t m;
     m.decode(data, 0, static_cast<int>(size));
   }
-  if (kincal::daemon::PlausibleFrame(data, size, &why)) {
+  if (kincal::PlausibleFrame(data, size, &why)) {
     kincal::frame_t m;
     m.decode(data, 0, static_cast<int>(size));
   }
@@ -158,14 +158,17 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
     if (std::strncmp((*argv)[i], "--target=", 9) == 0) g_target = (*argv)[i] + 9;
   }
   if (g_target.empty()) {
-    std::fprintf(stderr, "kincal_fuzz: give --target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame\n");
+    std::fprintf(stderr,
+                 "kincal_fuzz: give "
+                 "--target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame\n");
     std::exit(2);
   }
   // The library's warnings (e.g. replay naming each damaged stretch) would flood the
   // output at thousands of executions per second.
   spdlog::set_level(spdlog::level::off);
   // Scratch files in memory when possible: every execution writes its input to a file.
-  std::string tmpl = (::access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp") + std::string("/kincal_fuzz_XXXXXX");
+  std::string tmpl =
+      (::access("/dev/shm", W_OK) == 0 ? "/dev/shm" : "/tmp") + std::string("/kincal_fuzz_XXXXXX");
   const char* dir = ::mkdtemp(tmpl.data());
   if (dir == nullptr) std::exit(2);
   g_dir = dir;
@@ -174,14 +177,22 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
 }
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  if (g_target == "lcm_log") FuzzLcmLog(data, size);
-  else if (g_target == "controls") FuzzControls(data, size);
-  else if (g_target == "lcm_messages") FuzzLcmMessages(data, size);
-  else if (g_target == "csv") FuzzCsv(data, size);
-  else if (g_target == "mrclam") FuzzMrclam(data, size);
-  else if (g_target == "yaml") FuzzYaml(data, size);
-  else if (g_target == "checkpoint") FuzzCheckpoint(data, size);
-  else if (g_target == "frame") FuzzFrame(data, size);
+  if (g_target == "lcm_log")
+    FuzzLcmLog(data, size);
+  else if (g_target == "controls")
+    FuzzControls(data, size);
+  else if (g_target == "lcm_messages")
+    FuzzLcmMessages(data, size);
+  else if (g_target == "csv")
+    FuzzCsv(data, size);
+  else if (g_target == "mrclam")
+    FuzzMrclam(data, size);
+  else if (g_target == "yaml")
+    FuzzYaml(data, size);
+  else if (g_target == "checkpoint")
+    FuzzCheckpoint(data, size);
+  else if (g_target == "frame")
+    FuzzFrame(data, size);
   else {
     std::fprintf(stderr, "kincal_fuzz: unknown target '%s'\n", g_target.c_str());
     std::exit(2);

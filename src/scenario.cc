@@ -15,8 +15,8 @@ T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std:
   try {
     return n[key].as<T>();
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" +
-                             key + "': " + e.msg);
+    throw std::runtime_error(file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key +
+                             "': " + e.msg);
   }
 }
 
@@ -29,9 +29,13 @@ Scenario LoadScenario(const std::string& file) {
   } catch (const YAML::Exception& e) {
     throw std::runtime_error(file + ": " + e.what());
   }
-  static const std::set<std::string> kKeys = {
-      "model", "truth", "hidden_effects", "estimator_effects", "guess", "guess_sigma_fraction",
-      "duration_s", "seed", "controls", "camera", "filter", "control_psd", "report_every_s"};
+  static const std::set<std::string> kKeys = {"model",          "truth",
+                                              "hidden_effects", "estimator_effects",
+                                              "guess",          "guess_sigma_fraction",
+                                              "duration_s",     "seed",
+                                              "controls",       "camera",
+                                              "filter",         "control_psd",
+                                              "report_every_s"};
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
     if (!kKeys.count(key)) {
@@ -72,7 +76,8 @@ Scenario LoadScenario(const std::string& file) {
   std::string error;
   if (!s.camera.IsValid(&error)) throw std::runtime_error(file + ": camera: " + error);
   if (!(s.duration_s > 0.0) || !(s.report_every_s > 0.0) || !(s.guess_sigma_fraction > 0.0)) {
-    throw std::runtime_error(file + ": duration_s, report_every_s, guess_sigma_fraction must be > 0");
+    throw std::runtime_error(file +
+                             ": duration_s, report_every_s, guess_sigma_fraction must be > 0");
   }
   if (!(s.pose_sigma.array() > 0.0).all()) {
     throw std::runtime_error(file + ": camera.pose_sigma must be > 0");
@@ -83,7 +88,8 @@ Scenario LoadScenario(const std::string& file) {
 VecN<kMaxState> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
                            const std::string& what) {
   VecN<kMaxState> p(sys.num_params());
-  for (int i = 0; i < sys.num_params(); ++i) p[i] = sys.params()[static_cast<size_t>(i)].default_value;
+  for (int i = 0; i < sys.num_params(); ++i)
+    p[i] = sys.params()[static_cast<size_t>(i)].default_value;
   for (const auto& [name, v] : values) {
     const int i = sys.ParamIndex(name);
     if (i < 0) throw std::runtime_error(what + ": unknown parameter '" + name + "'");

@@ -68,7 +68,8 @@ void AppendSmoothRandom(ControlSignal* out, TimeNs t0, TimeNs t1, std::span<cons
     std::array<double, kMaxControls> u{};
     for (int c = 0; c < nc; ++c) {
       double s = 0.0;
-      for (int k = 0; k < kTerms; ++k) s += amp[c][k] * std::sin(freq[c][k] * (t - start) + phase[c][k]);
+      for (int k = 0; k < kTerms; ++k)
+        s += amp[c][k] * std::sin(freq[c][k] * (t - start) + phase[c][k]);
       const double mid = 0.5 * (lo[static_cast<size_t>(c)] + hi[static_cast<size_t>(c)]);
       const double half = 0.5 * (hi[static_cast<size_t>(c)] - lo[static_cast<size_t>(c)]);
       u[static_cast<size_t>(c)] = mid + half * s;

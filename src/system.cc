@@ -33,8 +33,7 @@ void IntegrateArc(const Twist<T>& tw, const T& dt, T* x, T* y, T* theta) {
   *theta += a;
 }
 
-template void IntegrateArc<double>(const Twist<double>&, const double&, double*, double*,
-                                   double*);
+template void IntegrateArc<double>(const Twist<double>&, const double&, double*, double*, double*);
 template void IntegrateArc<Jet>(const Twist<Jet>&, const Jet&, Jet*, Jet*, Jet*);
 template void IntegrateArc<BJet>(const Twist<BJet>&, const BJet&, BJet*, BJet*, BJet*);
 
@@ -65,9 +64,9 @@ System::System(std::shared_ptr<const KinematicModel> model,
     }
   }
   if (num_effect_states_ > kMaxEffectStates) {
-    throw std::invalid_argument("System: " + std::to_string(num_effect_states_) +
-                                " effect states exceed kMaxEffectStates = " +
-                                std::to_string(kMaxEffectStates));
+    throw std::invalid_argument(
+        "System: " + std::to_string(num_effect_states_) +
+        " effect states exceed kMaxEffectStates = " + std::to_string(kMaxEffectStates));
   }
   if (state_dim() > kMaxState) {
     throw std::invalid_argument("System: augmented state of " + std::to_string(state_dim()) +
@@ -103,7 +102,8 @@ StateVec System::DefaultState(double x, double y, double theta) const {
   s[0] = x;
   s[1] = y;
   s[2] = theta;
-  for (int i = 0; i < num_params_; ++i) s[kPoseDim + i] = params_[static_cast<size_t>(i)].default_value;
+  for (int i = 0; i < num_params_; ++i)
+    s[kPoseDim + i] = params_[static_cast<size_t>(i)].default_value;
   return s;
 }
 

@@ -2,12 +2,11 @@
 // effect (or two) from the estimator, `Analyze` starts from the bare model, and must name
 // the effect, recover its parameters within 3 sigma and at least halve the held-out
 // residual. On clean data it must not invent effects.
-#include "kincal/analysis/analyze.h"
-
 #include <gtest/gtest.h>
 
 #include <random>
 
+#include "kincal/analysis/analyze.h"
 #include "kincal/simulator.h"
 #include "test_util.h"
 
@@ -86,21 +85,23 @@ TEST_P(Undeclared, FindsNamesAndRecoversTheHiddenEffect) {
       for (const auto& p : r.after.params) {
         if (p.name.rfind(name, 0) != 0) continue;
         EXPECT_LE(std::abs(p.value - truth), 3.0 * p.sigma)
-            << sc.model << " " << p.name << " = " << p.value << " +- " << p.sigma << ", truth " << truth;
+            << sc.model << " " << p.name << " = " << p.value << " +- " << p.sigma << ", truth "
+            << truth;
       }
     }
   }
   const double pos = r.after.heldout.pos_rms_m / r.before.heldout.pos_rms_m;
   const double head = r.after.heldout.heading_rms_rad / r.before.heldout.heading_rms_rad;
-  EXPECT_LE(std::min(pos, head), 0.5) << sc.model << " accepted: " << accepted << " pos ratio " << pos
-                                      << " heading ratio " << head;
+  EXPECT_LE(std::min(pos, head), 0.5)
+      << sc.model << " accepted: " << accepted << " pos ratio " << pos << " heading ratio " << head;
 }
 
 std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
   std::string n = AllModelScenarios()[static_cast<size_t>(info.param.model)].model;
   for (const auto& h : info.param.hidden) {
     n += "_" + BaseName(h.spec);
-    if (h.spec.find('[') != std::string::npos) n += "_" + h.spec.substr(h.spec.find('[') + 1, h.spec.find(']') - h.spec.find('[') - 1);
+    if (h.spec.find('[') != std::string::npos)
+      n += "_" + h.spec.substr(h.spec.find('[') + 1, h.spec.find(']') - h.spec.find('[') - 1);
   }
   return n;
 }
@@ -124,7 +125,9 @@ std::vector<Case> SingleEffectCases() {
     cases.push_back({m, {{"asymmetric_gain[" + c1 + "]", {{"asym_" + c1, 0.15}}}}});
     cases.push_back({m, {{"dead_band[" + c1 + "]", {{"band_" + c1, 0.1 * range1}}}}});
     if (model->has_steering()) {
-      const double play = model->controls()[static_cast<size_t>(model->steering_channel())].unit == "rad" ? 0.06 : 60.0;
+      const double play =
+          model->controls()[static_cast<size_t>(model->steering_channel())].unit == "rad" ? 0.06
+                                                                                          : 60.0;
       cases.push_back({m, {{"backlash", {{"backlash", play}}}}});
     }
     (void)c0;
@@ -138,7 +141,9 @@ INSTANTIATE_TEST_SUITE_P(EveryModelAndEffect, Undeclared, ::testing::ValuesIn(Si
 INSTANTIATE_TEST_SUITE_P(
     Pairs, Undeclared,
     ::testing::Values(
-        Case{1, {{"time_offset", {{"delay_s", 0.2}}}, {"lever_arm", {{"dx", 0.1}, {"dy", 0.05}, {"dtheta", -0.04}}}}},
+        Case{1,
+             {{"time_offset", {{"delay_s", 0.2}}},
+              {"lever_arm", {{"dx", 0.1}, {"dy", 0.05}, {"dtheta", -0.04}}}}},
         Case{0, {{"actuator_lag", {{"tau_s", 0.2}}}, {"yaw_rate_bias", {{"bias_rad_s", 0.05}}}}},
         Case{2, {{"backlash", {{"backlash", 0.06}}}, {"time_offset", {{"delay_s", 0.15}}}}},
         Case{3, {{"turn_slowdown", {{"c_slow", 0.5}}}, {"time_offset", {{"delay_s", 0.15}}}}}),
@@ -177,7 +182,9 @@ TEST(Baseline, GuessesOffByFiveStillReachTheGlobalOptimum) {
       o.init.clear();
       for (int i = 0; i < sys.num_params(); ++i) {
         const auto& p = sys.params()[static_cast<size_t>(i)];
-        o.init[p.name] = sc.truth[static_cast<size_t>(i)] == 0.0 ? 0.0 : sc.truth[static_cast<size_t>(i)] * factor;
+        o.init[p.name] = sc.truth[static_cast<size_t>(i)] == 0.0
+                             ? 0.0
+                             : sc.truth[static_cast<size_t>(i)] * factor;
       }
       const AnalyzeResult r = Analyze(rec, o);
       for (int i = 0; i < sys.num_params(); ++i) {

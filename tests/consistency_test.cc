@@ -7,7 +7,6 @@
 #include <random>
 
 #include "kincal/angles.h"
-
 #include "kincal/estimation/online_calibrator.h"
 #include "test_util.h"
 
@@ -15,8 +14,6 @@ namespace kincal {
 namespace {
 
 using testing::AllModelScenarios;
-
-
 
 // Two-sided 95 % chi-square quantiles (2.5 %, 97.5 %) by degrees of freedom.
 std::pair<double, double> Chi2Band(int dof) {
@@ -53,8 +50,8 @@ TEST_P(Consistency, NeesInside95PercentBand) {
   const Eigen::Vector3d sigma(0.002, 0.002, 0.01);
   const Eigen::Matrix3d R = sigma.array().square().matrix().asDiagonal();
   for (int run = 0; run < runs; ++run) {
-    testing::SimData d = testing::Simulate(sys, testing::ToVec(sc.truth), sc.lo, sc.hi, 20.0,
-                                           15.0, sigma, rng);
+    testing::SimData d =
+        testing::Simulate(sys, testing::ToVec(sc.truth), sc.lo, sc.hi, 20.0, 15.0, sigma, rng);
     OnlineCalibratorOptions opt;
     ControlSignal realised = d.controls;
     if (control_noise) {
@@ -106,10 +103,14 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{0, false, {}, {}}, Case{1, false, {}, {}}, Case{2, false, {}, {}},
                       Case{3, false, {}, {}}, Case{0, true, {}, {}}, Case{1, true, {}, {}},
                       Case{2, true, {}, {}}, Case{3, true, {}, {}},
-                      Case{1, false, {"time_offset", "lever_arm"},
+                      Case{1,
+                           false,
+                           {"time_offset", "lever_arm"},
                            {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
                       Case{0, false, {"actuator_lag"}, {{"tau_s", 0.12}}},
-                      Case{2, false, {"lateral_slip", "yaw_rate_bias"},
+                      Case{2,
+                           false,
+                           {"lateral_slip", "yaw_rate_bias"},
                            {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
     CaseName);
 

@@ -10,8 +10,8 @@ TEST(ControlSignal, ZeroOrderHoldForwardAndZeroBeforeFirstSample) {
   const std::array<double, 2> a = {1.0, 2.0}, b = {3.0, 4.0};
   ASSERT_TRUE(s.Append(2'000'000'000, a));
   ASSERT_TRUE(s.Append(3'000'000'000, b));
-  EXPECT_EQ(s.At(0.5)[0], 0.0);   // before the first sample (t = 1.5 s)
-  EXPECT_EQ(s.At(1.0)[0], 1.0);   // exactly at a sample: that sample
+  EXPECT_EQ(s.At(0.5)[0], 0.0);  // before the first sample (t = 1.5 s)
+  EXPECT_EQ(s.At(1.0)[0], 1.0);  // exactly at a sample: that sample
   EXPECT_EQ(s.At(1.999)[1], 2.0);
   EXPECT_EQ(s.At(2.0)[1], 4.0);
   EXPECT_EQ(s.At(100.0)[0], 3.0);  // held after the last sample

@@ -1,24 +1,25 @@
 // kincald on the host: queues, configs, frame decoding, checkpoints, the recorder, and the
 // whole pipeline on the simulated camera over LCM memq: convergence to the simulated
 // truth, record -> replay giving the same estimates, resume from a checkpoint.
+#include "kincal/daemon/daemon.h"
+
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
 #include <kincal/controls_t.hpp>
 #include <kincal/params_t.hpp>
 #include <kincal/pose_t.hpp>
 #include <lcm/lcm-cpp.hpp>
-
-#include <filesystem>
-#include <fstream>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 
-#include "kincal/daemon/bounded_queue.h"
+#include "daemon/bounded_queue.h"
+#include "daemon/recorder.h"
+#include "daemon/sources.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
-#include "kincal/daemon/daemon.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/recorder.h"
-#include "kincal/daemon/sources.h"
 #include "kincal/scenario.h"
 
 namespace kincal::daemon {
@@ -27,7 +28,8 @@ namespace {
 const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
 
 std::string TempPath(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("kincal_daemon_test_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("kincal_daemon_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return (dir / name).string();
 }
@@ -118,7 +120,9 @@ TEST(DaemonConfig, UnknownKeyNamesFileLineAndTheKnownKeys) {
     LoadDaemonConfig(path);
     FAIL() << "accepted an unknown key";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("bad.yaml:4: unknown key 'filter.kappa'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:4: unknown key 'filter.kappa'"),
+              std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("max_pose_gap_s"), std::string::npos) << e.what();
   }
 }
@@ -130,10 +134,11 @@ TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
     LoadDaemonConfig(path);
     FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("bad_type.yaml:2: key 'v4l2.width'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("bad_type.yaml:2: key 'v4l2.width'"), std::string::npos)
+        << e.what();
   }
   DaemonConfig c;
-  c.source = "v4l2";
+  c.source = SourceKind::kV4l2;
   c.v4l2.buffers = 2;
   EXPECT_THROW(Validate(c), std::runtime_error);
   c = DaemonConfig{};
@@ -142,7 +147,8 @@ TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
     Validate(c);
     FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("no parameter 'wheel_radius'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no parameter 'wheel_radius'"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -151,7 +157,8 @@ TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
 cv::Mat TestImage() {
   cv::Mat g(48, 64, CV_8UC1);
   for (int r = 0; r < g.rows; ++r)
-    for (int c = 0; c < g.cols; ++c) g.at<uint8_t>(r, c) = static_cast<uint8_t>((r * 7 + c * 3) % 251);
+    for (int c = 0; c < g.cols; ++c)
+      g.at<uint8_t>(r, c) = static_cast<uint8_t>((r * 7 + c * 3) % 251);
   return g;
 }
 
@@ -170,11 +177,13 @@ TEST(Frames, EveryFormatDecodesToTheSameGrey) {
   y.format = PixelFormat::kYuyv;
   y.data.assign(static_cast<size_t>(y.stride) * g.rows, 128);
   for (int r = 0; r < g.rows; ++r)
-    for (int c = 0; c < g.cols; ++c) y.data[static_cast<size_t>(r) * y.stride + 2 * c] = g.at<uint8_t>(r, c);
+    for (int c = 0; c < g.cols; ++c)
+      y.data[static_cast<size_t>(r) * y.stride + 2 * c] = g.at<uint8_t>(r, c);
   ToGrey(y, &out);
   EXPECT_EQ(cv::norm(out, g, cv::NORM_INF), 0.0);
   // PNG (lossless) and MJPEG (lossy: small error).
-  for (const auto& [ext, fmt, tol] : {std::tuple{".png", PixelFormat::kPng, 0.0}, std::tuple{".jpg", PixelFormat::kMjpeg, 12.0}}) {
+  for (const auto& [ext, fmt, tol] : {std::tuple{".png", PixelFormat::kPng, 0.0},
+                                      std::tuple{".jpg", PixelFormat::kMjpeg, 12.0}}) {
     Frame e;
     e.width = g.cols;
     e.height = g.rows;
@@ -220,7 +229,8 @@ TEST(Frames, BadBuffersAreErrorsNotCrashes) {
     ToGrey(p, &out);
     FAIL();
   } catch (const FrameError& e) {
-    EXPECT_NE(std::string(e.what()).find("declares 64x48, expected 32x48"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("declares 64x48, expected 32x48"), std::string::npos)
+        << e.what();
   }
   // Content in another format is not handed to whichever OpenCV decoder claims it (the
   // fuzzer found a DICOM reader that aborts the process): the declared format only.
@@ -231,7 +241,8 @@ TEST(Frames, BadBuffersAreErrorsNotCrashes) {
   Frame other = p;
   other.format = PixelFormat::kMjpeg;  // PNG bytes labelled MJPG
   EXPECT_THROW(ToGrey(other, &out), FrameError);
-  std::ifstream crash(std::string(KINCAL_SOURCE_DIR) + "/fuzz/corpus/frame/regress-dicom-abort", std::ios::binary);
+  std::ifstream crash(std::string(KINCAL_SOURCE_DIR) + "/fuzz/corpus/frame/regress-dicom-abort",
+                      std::ios::binary);
   ASSERT_TRUE(crash.good());
   const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(crash)), {});
   ASSERT_GT(bytes.size(), 5u);
@@ -266,7 +277,9 @@ TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
   EXPECT_EQ(r.covariance, c.covariance);
   std::ostringstream yaml;
   WriteExportYaml(yaml, r, path);
-  EXPECT_NE(yaml.str().find("  r_r: {value: 0.0313, sigma: 0.0001, unit: \"m\"}"), std::string::npos) << yaml.str();
+  EXPECT_NE(yaml.str().find("  r_r: {value: 0.0313, sigma: 0.0001, unit: \"m\"}"),
+            std::string::npos)
+      << yaml.str();
   std::ofstream(path) << "{\"format\": \"kincal-checkpoint\", \"version\": 1, \"model\": 3}";
   EXPECT_THROW(ReadCheckpoint(path), std::runtime_error);
 }
@@ -323,15 +336,17 @@ DaemonConfig SimConfig(double duration_s) {
   return c;
 }
 
-std::map<std::string, double> Truth(const DaemonConfig& c) { return LoadScenario(c.sim.scenario).truth; }
+std::map<std::string, double> Truth(const DaemonConfig& c) {
+  return LoadScenario(c.sim.scenario).truth;
+}
 
 void ExpectWithin3Sigma(const Checkpoint& e, const std::map<std::string, double>& truth) {
   ASSERT_EQ(e.names.size(), 3u);
   for (size_t i = 0; i < e.names.size(); ++i) {
     const double sigma = std::sqrt(e.covariance(static_cast<int>(i), static_cast<int>(i)));
     const double err = e.values[i] - truth.at(e.names[i]);
-    EXPECT_LT(std::abs(err), 3 * sigma) << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth "
-                                        << truth.at(e.names[i]);
+    EXPECT_LT(std::abs(err), 3 * sigma) << e.names[i] << " = " << e.values[i] << " +- " << sigma
+                                        << ", truth " << truth.at(e.names[i]);
     EXPECT_LT(sigma, 0.002 * std::abs(truth.at(e.names[i]))) << e.names[i] << ": not converged";
   }
 }
@@ -352,13 +367,13 @@ TEST(DaemonSim, ConvergesToTheSimulatedRobotAndReplaysBitIdentically) {
   EXPECT_GT(lc.updates, 1000);
   EXPECT_EQ(lc.frames_dropped_queue, 0);
   EXPECT_EQ(lc.log_events_lost, 0);
-  EXPECT_EQ(lc.controls_rejected, 0);
+  EXPECT_EQ(lc.messages_rejected, 0);
   // Replay the log twice, as fast as possible: the same estimate, bit for bit, both times
   // and as the live (lossless) run.
   std::vector<Checkpoint> replays;
   for (int k = 0; k < 2; ++k) {
     DaemonConfig r = c;
-    r.source = "replay";
+    r.source = SourceKind::kReplay;
     r.replay.path = c.record.path;
     r.replay.speed = 0;
     r.record.path.clear();
@@ -378,9 +393,9 @@ TEST(DaemonSim, ControlsOverLcmAndPublishedOutputs) {
   DaemonConfig c = SimConfig(20);
   c.sim.controls_via_lcm = true;  // the filter gets the robot's controls only through LCM
   c.sim.speed = 4;                // paced: LCM delivery keeps up
-  c.robot.control_stamp = "receive";
+  c.robot.control_stamp = ControlStamp::kReceive;
   EXPECT_THROW(Validate(c), std::runtime_error) << "wall-clock receive stamps on a 4x simulation";
-  c.robot.control_stamp = "sender";
+  c.robot.control_stamp = ControlStamp::kSender;
   c.record.path = TempPath("sim_lcm.lcm");
   Daemon d(c);
   ASSERT_EQ(d.Run(), 0);
@@ -398,8 +413,9 @@ TEST(DaemonSim, ControlsOverLcmAndPublishedOutputs) {
       ASSERT_GT(last.decode(ev->data, 0, ev->datalen), 0);
     }
   }
-  for (const auto* ch : {&c.lcm.frame_channel, &c.lcm.controls_channel, &c.lcm.pose_channel, &c.lcm.params_channel,
-                         &c.lcm.health_channel, &c.lcm.model_check_channel, &c.lcm.markers_channel}) {
+  for (const auto* ch :
+       {&c.lcm.frame_channel, &c.lcm.controls_channel, &c.lcm.pose_channel, &c.lcm.params_channel,
+        &c.lcm.health_channel, &c.lcm.model_check_channel, &c.lcm.markers_channel}) {
     EXPECT_GT(per_channel[*ch], 0) << *ch;
   }
   EXPECT_EQ(per_channel[c.lcm.frame_channel], k.frames_captured);
@@ -428,11 +444,13 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
   ASSERT_EQ(d2.Run(), 0);
   const Checkpoint second = d2.Estimate();
   for (int i = 0; i < 3; ++i) {
-    EXPECT_LE(second.covariance(i, i), first.covariance(i, i)) << second.names[static_cast<size_t>(i)];
+    EXPECT_LE(second.covariance(i, i), first.covariance(i, i))
+        << second.names[static_cast<size_t>(i)];
   }
   ExpectWithin3Sigma(second, Truth(c));
   c2.checkpoint.resume = TempPath("missing.json");
-  EXPECT_THROW(Daemon d3(c2), std::runtime_error) << "a missing checkpoint is an error, not a silent fresh start";
+  EXPECT_THROW(Daemon d3(c2), std::runtime_error)
+      << "a missing checkpoint is an error, not a silent fresh start";
 }
 
 TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
@@ -492,16 +510,17 @@ TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
     }
   }
   // And the log ends with an event cut short (a header without its body).
-  std::ofstream(hostile, std::ios::app | std::ios::binary) << std::string("\xed\xa1\xda\x01\0\0\0\0", 8);
+  std::ofstream(hostile, std::ios::app | std::ios::binary)
+      << std::string("\xed\xa1\xda\x01\0\0\0\0", 8);
   DaemonConfig r = c;
-  r.source = "replay";
+  r.source = SourceKind::kReplay;
   r.replay.path = hostile;
   r.replay.speed = 0;
   r.record.path.clear();
   Daemon d(r);
   ASSERT_EQ(d.Run(), 0);
-  EXPECT_EQ(d.counters().controls_rejected, 4);
-  EXPECT_EQ(d.counters().frame_errors, 2);  // the corrupt frame and the cut-short end
+  EXPECT_EQ(d.counters().messages_rejected, 4);
+  EXPECT_EQ(d.counters().frames_bad, 2);  // the corrupt frame and the cut-short end
   EXPECT_EQ(d.Estimate().values, clean.values) << "rejected input must not change the estimate";
 }
 

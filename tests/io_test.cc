@@ -57,17 +57,22 @@ const char* kPoses = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0,0\n";
 
 TEST_F(Io, MissingColumnNamesFileLineAndExpectedHeader) {
   const std::string e = Error("t,v\n0,1\n", kPoses);
-  EXPECT_NE(e.find("c.csv:1: header lacks column 'omega' (expected header 't,v,omega')"), std::string::npos) << e;
+  EXPECT_NE(e.find("c.csv:1: header lacks column 'omega' (expected header 't,v,omega')"),
+            std::string::npos)
+      << e;
 }
 
 TEST_F(Io, NonNumericValueNamesLineAndColumn) {
   const std::string e = Error("t,v,omega\n0,1,0\n1,fast,0\n", kPoses);
-  EXPECT_NE(e.find("c.csv:3: column 'v': expected a finite number, got 'fast'"), std::string::npos) << e;
+  EXPECT_NE(e.find("c.csv:3: column 'v': expected a finite number, got 'fast'"), std::string::npos)
+      << e;
 }
 
 TEST_F(Io, TimeGoingBackwardsIsAnError) {
   const std::string e = Error("t,v,omega\n0,1,0\n2,1,0\n1,1,0\n", kPoses);
-  EXPECT_NE(e.find("c.csv:4: time 1 goes backwards (previous row, line 3, has 2)"), std::string::npos) << e;
+  EXPECT_NE(e.find("c.csv:4: time 1 goes backwards (previous row, line 3, has 2)"),
+            std::string::npos)
+      << e;
 }
 
 TEST_F(Io, DisjointSpansAreAnError) {
@@ -77,7 +82,8 @@ TEST_F(Io, DisjointSpansAreAnError) {
 
 TEST_F(Io, EmptyFileAndWrongRowLength) {
   EXPECT_NE(Error("", kPoses).find("c.csv: empty file (no header)"), std::string::npos);
-  EXPECT_NE(Error("t,v,omega\n0,1\n", kPoses).find("c.csv:2: expected 3 values, found 2"), std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n0,1\n", kPoses).find("c.csv:2: expected 3 values, found 2"),
+            std::string::npos);
   EXPECT_NE(Error("t,v,omega\n", kPoses).find("c.csv: no control rows"), std::string::npos);
 }
 
@@ -98,7 +104,8 @@ TEST_F(Io, HeadingInDegreesIsFlagged) {
                                        Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"),
                                        *MakeModel("unicycle"));
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos) << r.warnings[0];
+  EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos)
+      << r.warnings[0];
 }
 
 TEST_F(Io, MrclamCommentsAndMissingFile) {
@@ -113,7 +120,8 @@ TEST_F(Io, MrclamCommentsAndMissingFile) {
     ReadMrclam(d, 2);
     FAIL();
   } catch (const RecordingError& e) {
-    EXPECT_NE(std::string(e.what()).find("Robot2_Odometry.dat: cannot open"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("Robot2_Odometry.dat: cannot open"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -143,8 +151,8 @@ TEST_F(Io, LcmLogReadsBack) {
   EXPECT_EQ(r.controls.size(), 5u);
   EXPECT_EQ(r.poses.size(), 5u);
   EXPECT_DOUBLE_EQ(r.origin_s, 1.0);
-  EXPECT_EQ(r.controls.At(0.45)[0], 0.5);                 // v, mapped by name
-  EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);        // omega
+  EXPECT_EQ(r.controls.At(0.45)[0], 0.5);           // v, mapped by name
+  EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);  // omega
   EXPECT_NEAR(r.poses[2].z.x(), 0.1, 1e-12);
   EXPECT_THROW(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle")), RecordingError);
 }
@@ -188,7 +196,8 @@ TEST_F(Io, LcmLogReaderReadsWhatLiblcmWrites) {
     EXPECT_EQ(ev[k].channel, "CH" + std::to_string(k));
     EXPECT_EQ(ev[k].timestamp, 1000 + k);
     EXPECT_EQ(ev[k].offset, off[k]);
-    EXPECT_EQ(ev[k].data, std::vector<uint8_t>(static_cast<size_t>(100 + k), static_cast<uint8_t>(k)));
+    EXPECT_EQ(ev[k].data,
+              std::vector<uint8_t>(static_cast<size_t>(100 + k), static_cast<uint8_t>(k)));
   }
   EXPECT_EQ(r.damaged_bytes(), 0);
   EXPECT_FALSE(r.truncated());
@@ -207,7 +216,8 @@ TEST_F(Io, LcmLogReaderNamesACutShortLastEvent) {
     EXPECT_EQ(ReadAll(r).size(), 2u) << cut;
     EXPECT_TRUE(r.truncated());
     ASSERT_EQ(r.problems().size(), 1u);
-    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[2])), std::string::npos) << r.problems()[0];
+    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[2])), std::string::npos)
+        << r.problems()[0];
     EXPECT_NE(r.problems()[0].find("cut short"), std::string::npos) << r.problems()[0];
   }
 }
@@ -227,7 +237,8 @@ TEST_F(Io, LcmLogReaderSkipsDamageAndSaysWhere) {
     EXPECT_EQ(r.damaged_bytes(), off[2] - off[1]);
     EXPECT_FALSE(r.truncated());
     ASSERT_EQ(r.problems().size(), 1u);
-    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[1])), std::string::npos) << r.problems()[0];
+    EXPECT_NE(r.problems()[0].find("byte " + std::to_string(off[1])), std::string::npos)
+        << r.problems()[0];
   }
   {  // Seven junk bytes between the first and second events.
     std::string b = bytes;
@@ -281,7 +292,8 @@ TEST_F(Io, UnobservableParameterIsNamedWithTheMotionThatExcitesIt) {
     c += std::to_string(t) + ",0.5,0\n";
     p += std::to_string(t) + "," + std::to_string(0.45 * t) + ",0,0\n";
   }
-  const Recording rec = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *MakeModel("unicycle"));
+  const Recording rec =
+      ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *MakeModel("unicycle"));
   AnalyzeOptions o;
   o.model = "unicycle";
   o.effects_mode = "none";

@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <random>
 
+#include "daemon/messages.h"
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/simulator.h"
 
@@ -55,10 +56,12 @@ TEST(ModelCheck, VerdictTravelsAsAnLcmMessage) {
   ASSERT_TRUE(lcm.good());
   struct Sink {
     std::vector<model_check_t> got;
-    void On(const lcm::ReceiveBuffer*, const std::string&, const model_check_t* m) { got.push_back(*m); }
+    void On(const lcm::ReceiveBuffer*, const std::string&, const model_check_t* m) {
+      got.push_back(*m);
+    }
   } sink;
   lcm.subscribe("KINCAL_MODEL_CHECK", &Sink::On, &sink);
-  const model_check_t msg = ToMessage(RunOnline(0.1, 3), "unicycle", 123);
+  const model_check_t msg = daemon::ModelCheckMessage(RunOnline(0.1, 3), "unicycle", 123);
   ASSERT_EQ(lcm.publish("KINCAL_MODEL_CHECK", &msg), 0);
   ASSERT_GE(lcm.handleTimeout(100), 0);
   ASSERT_EQ(sink.got.size(), 1u);

@@ -112,8 +112,7 @@ TEST_P(BareModelTest, ExactIntegrationMatchesFineEuler) {
 }
 
 std::string ModelTestName(const ::testing::TestParamInfo<std::tuple<int, int>>& info) {
-  static const char* kSets[] = {"", "_timing_lag_lever_slip_bias",
-                                "_asym_deadband_track_backlash"};
+  static const char* kSets[] = {"", "_timing_lag_lever_slip_bias", "_asym_deadband_track_backlash"};
   return AllModelScenarios()[static_cast<size_t>(std::get<0>(info.param))].model +
          std::string(kSets[std::get<1>(info.param)]);
 }
@@ -139,8 +138,8 @@ TEST(Conventions, PositiveSteeringAndFasterRightWheelTurnLeft) {
   // Ackermann with a driven rear wheel: forward speed is R_B * omega, no cos(phi).
   EXPECT_NEAR(TwistOf("ackermann", {0.05, 0.3, 0.0}, {10.0, 0.4}).vx, 0.5, 1e-12);
   // Tricycle: the front wheel drives, the rear-axle midpoint moves at v_f cos(phi).
-  EXPECT_NEAR(TwistOf("tricycle", {0.001, 0.0, 1e-4, 0.5}, {400.0, 5000.0}).vx,
-              0.5 * std::cos(0.4), 1e-12);
+  EXPECT_NEAR(TwistOf("tricycle", {0.001, 0.0, 1e-4, 0.5}, {400.0, 5000.0}).vx, 0.5 * std::cos(0.4),
+              1e-12);
 }
 
 TEST(Effects, TimeOffsetDelaysTheMotion) {

@@ -52,7 +52,8 @@ TEST_P(Recovery, FilterAndBatchRecoverTruthWithin3Sigma) {
   const VecN<kMaxState> guess = Guess(sys, truth);
   StateMat P = StateMat::Zero(np, np);
   for (int i = 0; i < np; ++i) {
-    const double s = std::max(0.2 * std::abs(guess[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
+    const double s =
+        std::max(0.2 * std::abs(guess[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
     P(i, i) = s * s;
   }
   // Recursive DD2.
@@ -83,10 +84,13 @@ TEST_P(Recovery, FilterAndBatchRecoverTruthWithin3Sigma) {
 
 INSTANTIATE_TEST_SUITE_P(
     Models, Recovery,
-    ::testing::Values(Case{0, {}, {}}, Case{1, {}, {}}, Case{2, {}, {}}, Case{3, {}, {}},
-                      Case{1, {"time_offset", "lever_arm"}, {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
-                      Case{0, {"actuator_lag"}, {{"tau_s", 0.12}}},
-                      Case{2, {"lateral_slip", "yaw_rate_bias"}, {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
+    ::testing::Values(
+        Case{0, {}, {}}, Case{1, {}, {}}, Case{2, {}, {}}, Case{3, {}, {}},
+        Case{1,
+             {"time_offset", "lever_arm"},
+             {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
+        Case{0, {"actuator_lag"}, {{"tau_s", 0.12}}},
+        Case{2, {"lateral_slip", "yaw_rate_bias"}, {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
     [](const ::testing::TestParamInfo<Case>& info) {
       std::string name = AllModelScenarios()[static_cast<size_t>(info.param.model)].model;
       for (const auto& e : info.param.effects) name += "_" + e;

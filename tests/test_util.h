@@ -13,7 +13,7 @@ namespace kincal::testing {
 
 struct ModelScenario {
   std::string model;
-  std::vector<double> truth;  // model parameters
+  std::vector<double> truth;   // model parameters
   std::vector<double> lo, hi;  // control range
 };
 
@@ -34,9 +34,8 @@ struct SimData {
 
 // Smooth random controls for `duration_s`, camera at `rate_hz`, pose noise sigma.
 inline SimData Simulate(const System& truth_sys, const VecN<kMaxState>& params,
-                        std::span<const double> lo, std::span<const double> hi,
-                        double duration_s, double rate_hz, const Eigen::Vector3d& sigma,
-                        std::mt19937_64& rng) {
+                        std::span<const double> lo, std::span<const double> hi, double duration_s,
+                        double rate_hz, const Eigen::Vector3d& sigma, std::mt19937_64& rng) {
   SimData d{ControlSignal(truth_sys.num_controls(), 0), {}, {}};
   const TimeNs t1 = SecondsToNs(duration_s);
   AppendSmoothRandom(&d.controls, 0, t1, lo, hi, 2.0, 50.0, rng);

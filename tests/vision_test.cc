@@ -97,7 +97,9 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
     ReadCameraYaml(bad);
     FAIL();
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -134,7 +136,8 @@ TEST(Lowe, RecoversPoseAndAgreesWithSolvePnP) {
   std::vector<Eigen::Vector3d> obj;
   for (const auto& m : layout.markers) obj.emplace_back(m.x(), m.y(), 0.0);
   for (int trial = 0; trial < 20; ++trial) {
-    const Pose3 truth = TargetPose(Overhead(), Eigen::Vector3d(0.2 * g(rng) / 0.05, 0.1, trial * 0.3), 0.1);
+    const Pose3 truth =
+        TargetPose(Overhead(), Eigen::Vector3d(0.2 * g(rng) / 0.05, 0.1, trial * 0.3), 0.1);
     std::vector<Eigen::Vector2d> norm;
     std::vector<cv::Point3d> cobj;
     std::vector<cv::Point2d> cimg;
@@ -154,8 +157,12 @@ TEST(Lowe, RecoversPoseAndAgreesWithSolvePnP) {
     EXPECT_LT(dt.dot(Ct.ldlt().solve(dt)), 25.0) << trial;
     // solvePnP (ITERATIVE) minimises the same reprojection error: same answer.
     cv::Mat rvec, tvec;
-    cv::solvePnP(cobj, cimg, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false, cv::SOLVEPNP_ITERATIVE);
-    EXPECT_LT((r.pose.t - Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2))).norm(), 1e-6);
+    cv::solvePnP(cobj, cimg, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false,
+                 cv::SOLVEPNP_ITERATIVE);
+    EXPECT_LT(
+        (r.pose.t - Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)))
+            .norm(),
+        1e-6);
   }
 }
 
@@ -218,15 +225,18 @@ TEST(GroundPlane, PoseFromRenderedImagesWithinItsCovariance) {
   const int frames = 20;
   for (int f = 0; f < frames; ++f) {
     const Eigen::Vector3d q = Draw3(U, rng, 12);
-    const RenderedFrame fr = RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    const RenderedFrame fr =
+        RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
     std::vector<Rejected> rejected;
     auto markers = DetectMarkers(fr.image, DetectorOptions{}, {}, &rejected);
-    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers)) << "frame " << f << ": " << markers.size() << " markers, "
-                                                      << rejected.size() << " rejected"
-                                                      << (rejected.empty() ? "" : ": " + rejected[0].reason);
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers))
+        << "frame " << f << ": " << markers.size() << " markers, " << rejected.size() << " rejected"
+        << (rejected.empty() ? "" : ": " + rejected[0].reason);
     std::vector<Eigen::Vector2d> norm(4);
-    for (const auto& m : markers) norm[static_cast<size_t>(m.id)] = cam.PixelToNormalized(m.centre_px);
-    const PlanarPose p = GroundPlanePose(floor, 0.1, obj, norm, Eigen::Vector3d(0, 0, q.z() + 0.3), cam.fx, 0.02);
+    for (const auto& m : markers)
+      norm[static_cast<size_t>(m.id)] = cam.PixelToNormalized(m.centre_px);
+    const PlanarPose p =
+        GroundPlanePose(floor, 0.1, obj, norm, Eigen::Vector3d(0, 0, q.z() + 0.3), cam.fx, 0.02);
     ASSERT_TRUE(p.ok);
     Eigen::Vector3d e = p.xytheta - q;
     e.z() = std::remainder(e.z(), 2 * M_PI);
@@ -254,9 +264,12 @@ TEST(Calibration, RecoversIntrinsicsWithin3SigmaAndMatchesOpenCv) {
   opt.height = truth.height;
   const CalibrationResult r = CalibrateCamera(views, opt);
   ASSERT_TRUE(r.sigma_ok);
-  const double t[8] = {truth.fx, truth.fy, truth.cx, truth.cy, truth.k1, truth.k2, truth.p1, truth.p2};
-  const double e[8] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy, r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2};
-  for (int i = 0; i < 8; ++i) EXPECT_LE(std::abs(e[i] - t[i]), 3.0 * r.sigma[i]) << "parameter " << i;
+  const double t[8] = {truth.fx, truth.fy, truth.cx, truth.cy,
+                       truth.k1, truth.k2, truth.p1, truth.p2};
+  const double e[8] = {r.camera.fx, r.camera.fy, r.camera.cx, r.camera.cy,
+                       r.camera.k1, r.camera.k2, r.camera.p1, r.camera.p2};
+  for (int i = 0; i < 8; ++i)
+    EXPECT_LE(std::abs(e[i] - t[i]), 3.0 * r.sigma[i]) << "parameter " << i;
   EXPECT_NEAR(r.rms_px, 0.1 * std::sqrt(2.0), 0.015);  // OpenCV rms: both axes per point
   // cv::calibrateCamera on the same points (k3 fixed, as ours): the same optimum.
   const OpenCvCalibration cv_r = CalibrateWithOpenCv(views, opt, CameraModel{});
@@ -312,9 +325,11 @@ TEST(Markers, PerspectiveBiasCorrectionOnAnObliqueView) {
   auto markers = DetectMarkers(fr.image, DetectorOptions{});
   ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
   double before = 0, after = 0;
-  for (const auto& m : markers) before = std::max(before, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  for (const auto& m : markers)
+    before = std::max(before, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
   const double largest = CorrectPerspectiveBias(cam, pose, layout, &markers);
-  for (const auto& m : markers) after = std::max(after, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  for (const auto& m : markers)
+    after = std::max(after, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
   EXPECT_GT(largest, 0.02);
   EXPECT_GT(before, 0.02);
   EXPECT_LT(after, 0.4 * before) << "before " << before << " after " << after;
@@ -327,11 +342,14 @@ TEST(Markers, TrackerSearchesNearTheLastTargetAndFallsBack) {
   MarkerTracker tracker(cam, layout, DetectorOptions{});
   const FloorExtrinsics floor = Overhead();
   for (int k = 0; k < 10; ++k) {
-    const Eigen::Vector3d q = k < 9 ? Eigen::Vector3d(0.01 * k, 0.0, 0.05 * k) : Eigen::Vector3d(-0.2, 0.2, 1.0);
-    const RenderedFrame fr = RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    const Eigen::Vector3d q =
+        k < 9 ? Eigen::Vector3d(0.01 * k, 0.0, 0.05 * k) : Eigen::Vector3d(-0.2, 0.2, 1.0);
+    const RenderedFrame fr =
+        RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
     const auto markers = tracker.Track(fr.image);
     ASSERT_EQ(markers.size(), 4u) << k;
-    for (const auto& m : markers) EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+    for (const auto& m : markers)
+      EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
     if (k > 0 && k < 9) {
       EXPECT_FALSE(tracker.last_was_full_frame()) << k;
     }
@@ -354,8 +372,10 @@ TEST(Markers, TwoRobotsToldApartByTheirLayouts) {
   std::mt19937_64 rng(4);
   const FloorExtrinsics floor = Overhead();
   RenderOptions ro;
-  const RenderedFrame fa = RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(-0.12, 0.05, 0.4), 0.1), a, ro, rng);
-  const RenderedFrame fb = RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(0.13, -0.06, 2.2), 0.1), b, ro, rng);
+  const RenderedFrame fa =
+      RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(-0.12, 0.05, 0.4), 0.1), a, ro, rng);
+  const RenderedFrame fb =
+      RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(0.13, -0.06, 2.2), 0.1), b, ro, rng);
   cv::Mat both;
   cv::min(fa.image, fb.image, both);  // dark markers of both robots in one frame
   const auto detections = DetectMarkers(both, DetectorOptions{});
@@ -363,8 +383,10 @@ TEST(Markers, TwoRobotsToldApartByTheirLayouts) {
   const auto targets = IdentifyTargets(cam, {a, b}, detections);
   ASSERT_EQ(targets[0].size(), 4u);
   ASSERT_EQ(targets[1].size(), 4u);
-  for (const auto& m : targets[0]) EXPECT_LT((m.centre_px - fa.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
-  for (const auto& m : targets[1]) EXPECT_LT((m.centre_px - fb.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  for (const auto& m : targets[0])
+    EXPECT_LT((m.centre_px - fa.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  for (const auto& m : targets[1])
+    EXPECT_LT((m.centre_px - fb.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
 }
 
 }  // namespace
@@ -403,7 +425,8 @@ TEST(Markers, LightOnDarkAndMoreAccurateThanSimpleBlobDetector) {
     blob->detect(fr.image, kp);
     for (const auto& c : fr.centres) {
       double best = 1e9;
-      for (const auto& k : kp) best = std::min(best, (Eigen::Vector2d(k.pt.x, k.pt.y) - c).squaredNorm());
+      for (const auto& k : kp)
+        best = std::min(best, (Eigen::Vector2d(k.pt.x, k.pt.y) - c).squaredNorm());
       if (best < 4.0) {
         theirs += best;
         ++m_theirs;
@@ -471,15 +494,19 @@ TEST(Calibration, ThreeDimensionalRigThroughDlt) {
     v.name = "rig view " + std::to_string(views.size());
     const Eigen::Matrix3d R = (Eigen::AngleAxisd(M_PI + 0.35 * U(rng), Eigen::Vector3d::UnitX()) *
                                Eigen::AngleAxisd(0.35 * U(rng), Eigen::Vector3d::UnitY()) *
-                               Eigen::AngleAxisd(M_PI / 4 + 0.3 * U(rng), Eigen::Vector3d::UnitZ())).toRotationMatrix();
-    const Eigen::Vector3d t = Eigen::Vector3d(0, 0, 0.75) + Draw3(U, rng).cwiseProduct(Eigen::Vector3d(0.02, 0.02, 0.1));
+                               Eigen::AngleAxisd(M_PI / 4 + 0.3 * U(rng), Eigen::Vector3d::UnitZ()))
+                                  .toRotationMatrix();
+    const Eigen::Vector3d t =
+        Eigen::Vector3d(0, 0, 0.75) + Draw3(U, rng).cwiseProduct(Eigen::Vector3d(0.02, 0.02, 0.1));
     bool inside = true;
     for (int a = 0; a < 6; ++a) {
       for (int b = 0; b < 5; ++b) {
-        for (const Eigen::Vector3d& X : {Eigen::Vector3d(0.03 * a, 0.0, 0.03 * b), Eigen::Vector3d(0.0, 0.03 * a + 0.03, 0.03 * b)}) {
+        for (const Eigen::Vector3d& X : {Eigen::Vector3d(0.03 * a, 0.0, 0.03 * b),
+                                         Eigen::Vector3d(0.0, 0.03 * a + 0.03, 0.03 * b)}) {
           const Eigen::Vector3d Xc = R * X + t;
           const Eigen::Vector2d px = truth.Project(Xc) + Draw2(g, rng);
-          inside = inside && Xc.z() > 0 && px.x() > 0 && px.y() > 0 && px.x() < truth.width - 1 && px.y() < truth.height - 1;
+          inside = inside && Xc.z() > 0 && px.x() > 0 && px.y() > 0 && px.x() < truth.width - 1 &&
+                   px.y() < truth.height - 1;
           v.object.push_back(X);
           v.image.push_back(px);
         }

@@ -139,9 +139,7 @@ class EffectImpl : public Effect {
   void InitStates(const double* p, const double* u, double* s) const final {
     self().InitStatesT(p, u, s);
   }
-  void InitStates(const Jet* p, const Jet* u, Jet* s) const final {
-    self().InitStatesT(p, u, s);
-  }
+  void InitStates(const Jet* p, const Jet* u, Jet* s) const final { self().InitStatesT(p, u, s); }
   void InitStates(const BJet* p, const BJet* u, BJet* s) const final {
     self().InitStatesT(p, u, s);
   }
@@ -194,6 +192,6 @@ EffectSpec ParseEffectSpec(std::string_view text);
 }  // namespace kincal
 
 // Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_EFFECT(Class)                                                   \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::EffectRegistry::Instance().Register(       \
+#define KINCAL_REGISTER_EFFECT(Class)                                                              \
+  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::EffectRegistry::Instance().Register( \
       std::string(Class().name()), [] { return std::make_unique<Class>(); });

@@ -81,6 +81,6 @@ std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);
 }  // namespace kincal
 
 // Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_MODEL(Class)                                                    \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::ModelRegistry::Instance().Register(        \
+#define KINCAL_REGISTER_MODEL(Class)                                                              \
+  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::ModelRegistry::Instance().Register( \
       std::string(Class().name()), [] { return std::make_unique<Class>(); });

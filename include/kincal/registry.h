@@ -31,6 +31,12 @@ class Registry {
     }
     return nullptr;
   }
+  bool Has(std::string_view name) const {
+    for (const auto& entry : factories_) {
+      if (entry.first == name) return true;
+    }
+    return false;
+  }
   std::vector<std::string> Names() const {
     std::vector<std::string> names;
     for (const auto& entry : factories_) names.push_back(entry.first);

@@ -16,14 +16,14 @@ namespace kincal {
 // One-to-one image of the scenario YAML (see config/sim_*.yaml).
 struct Scenario {
   std::string model = "diffdrive";
-  std::map<std::string, double> truth;          // model + hidden-effect parameters
-  std::vector<std::string> hidden_effects;      // simulated, not told to the estimator
-  std::vector<std::string> estimator_effects;   // modelled by the estimator
-  std::map<std::string, double> guess;          // initial guess (default: model defaults)
-  double guess_sigma_fraction = 0.2;            // prior 1-sigma as a fraction of the guess
+  std::map<std::string, double> truth;         // model + hidden-effect parameters
+  std::vector<std::string> hidden_effects;     // simulated, not told to the estimator
+  std::vector<std::string> estimator_effects;  // modelled by the estimator
+  std::map<std::string, double> guess;         // initial guess (default: model defaults)
+  double guess_sigma_fraction = 0.2;           // prior 1-sigma as a fraction of the guess
   double duration_s = 120.0;
   uint64_t seed = 1;
-  std::string profile = "smooth";               // smooth | piecewise
+  std::string profile = "smooth";  // smooth | piecewise
   std::vector<double> control_low, control_high;
   double min_period_s = 2.0;
   double control_rate_hz = 50.0;

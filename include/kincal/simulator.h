@@ -19,10 +19,10 @@
 namespace kincal {
 
 struct FrameTimingOptions {
-  double rate_hz = 6.0;        // nominal frame rate
-  double jitter_max_s = 0.0;   // a stalled frame arrives up to this much later
-  double jitter_prob = 0.0;    // probability that a frame interval stalls
-  double dropout_prob = 0.0;   // probability that a frame is lost
+  double rate_hz = 6.0;       // nominal frame rate
+  double jitter_max_s = 0.0;  // a stalled frame arrives up to this much later
+  double jitter_prob = 0.0;   // probability that a frame interval stalls
+  double dropout_prob = 0.0;  // probability that a frame is lost
   bool IsValid(std::string* error) const;
 };
 

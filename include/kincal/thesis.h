@@ -31,9 +31,9 @@ inline constexpr double kThesisRL = 0.0310, kThesisRR = 0.0313, kThesisD = 0.148
 inline constexpr double kThesisNndePercent = 0.466;
 
 struct ThesisOptions {
-  int runs = 99;          // experiments 1..runs of Table 6-4
+  int runs = 99;  // experiments 1..runs of Table 6-4
   uint64_t seed = 1;
-  int trials = 1;         // Monte-Carlo repetitions (figures are RMS over trials)
+  int trials = 1;  // Monte-Carlo repetitions (figures are RMS over trials)
   double guess_error = 0.05;
   double centroid_sigma_px = 0.02;
   double camera_height_m = 1.5;
@@ -50,9 +50,9 @@ struct ThesisOptions {
 struct ThesisResult {
   int runs = 0;
   int trials = 0;
-  int frames = 0;                 // pose measurements per trial
-  double duration_s = 0.0;        // total driving time per trial
-  Eigen::Matrix3d pose_cov;       // measurement covariance used
+  int frames = 0;            // pose measurements per trial
+  double duration_s = 0.0;   // total driving time per trial
+  Eigen::Matrix3d pose_cov;  // measurement covariance used
   // Joint calibration over all runs: RMS NNDE (%) over trials, by estimator.
   std::map<std::string, double> joint_nnde_percent;
   // Bayesian Cramer-Rao bound of the joint design, as an RMS NNDE (%).

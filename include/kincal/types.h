@@ -51,10 +51,10 @@ using StateMeasMat = MatN<kMaxState, kMaxMeas>;
 
 // Describes one scalar parameter of a model or effect.
 struct ParamInfo {
-  std::string name;      // interface name: CSV, LCM, --init
-  std::string unit;      // SI unit, e.g. "m", "rad", "s", "1"
-  double default_value;  // generic initial guess for an unknown robot
-  double default_sigma;  // 1-sigma of that guess, same unit
+  std::string name;             // interface name: CSV, LCM, --init
+  std::string unit;             // SI unit, e.g. "m", "rad", "s", "1"
+  double default_value;         // generic initial guess for an unknown robot
+  double default_sigma;         // 1-sigma of that guess, same unit
   std::string excitation = {};  // what motion identifies it (for "unobservable" messages)
   // Physical lower bound (e.g. a length > 0), enforced by the batch fits; -inf if none.
   double min_value = -std::numeric_limits<double>::infinity();

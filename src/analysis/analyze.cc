@@ -61,7 +61,7 @@ struct Dataset {
   std::vector<Window> fit_windows;    // non-overlapping, in the fit span
   std::vector<Window> short_windows;  // shorter, for the multi-start stage
   std::vector<PoseMeasurement> fit_meas, short_meas;
-  std::vector<Features> features;     // per eval window
+  std::vector<Features> features;  // per eval window
 };
 
 int FindEnd(const std::vector<double>& t, int i, double h) {
@@ -88,7 +88,8 @@ std::vector<Window> NonOverlapping(const Dataset& d, double h, double t0, double
   }
   if (static_cast<int>(w.size()) > max_n) {
     std::vector<Window> sub;
-    for (int k = 0; k < max_n; ++k) sub.push_back(w[static_cast<size_t>(k) * w.size() / static_cast<size_t>(max_n)]);
+    for (int k = 0; k < max_n; ++k)
+      sub.push_back(w[static_cast<size_t>(k) * w.size() / static_cast<size_t>(max_n)]);
     w = sub;
   }
   return w;
@@ -102,7 +103,8 @@ std::vector<PoseMeasurement> WindowMeasurements(const Dataset& d, const std::vec
     std::vector<int> idx = {w.start};
     const int span = w.end - w.start;
     const int n = std::min(per_window, span);
-    for (int q = 1; q <= n; ++q) idx.push_back(w.start + static_cast<int>(std::lround(static_cast<double>(q) * span / n)));
+    for (int q = 1; q <= n; ++q)
+      idx.push_back(w.start + static_cast<int>(std::lround(static_cast<double>(q) * span / n)));
     idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
     for (int i : idx) {
       const auto& p = d.rec->poses[static_cast<size_t>(i)];
@@ -116,7 +118,8 @@ Eigen::Vector2d EstimatePoseSigma(const Recording& rec) {
   std::vector<double> dp, dh;
   const auto& P = rec.poses;
   for (size_t i = 1; i + 1 < P.size(); ++i) {
-    const double a = NsToSeconds(P[i].t_ns - P[i - 1].t_ns), b = NsToSeconds(P[i + 1].t_ns - P[i].t_ns);
+    const double a = NsToSeconds(P[i].t_ns - P[i - 1].t_ns),
+                 b = NsToSeconds(P[i + 1].t_ns - P[i].t_ns);
     if (a <= 0 || b <= 0 || std::abs(a - b) > 0.2 * std::max(a, b) || a > 0.2) continue;
     const Eigen::Vector2d d2 = P[i + 1].z.head<2>() - 2 * P[i].z.head<2>() + P[i - 1].z.head<2>();
     dp.push_back(d2.x());
@@ -140,7 +143,9 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   Dataset d;
   d.rec = &rec;
   d.horizon = o.horizon_s;
-  if (rec.poses.size() < 20) throw AnalysisError(rec.source + ": only " + std::to_string(rec.poses.size()) + " poses; at least 20 are needed");
+  if (rec.poses.size() < 20)
+    throw AnalysisError(rec.source + ": only " + std::to_string(rec.poses.size()) +
+                        " poses; at least 20 are needed");
   if (rec.controls.size() < 2) throw AnalysisError(rec.source + ": fewer than 2 control samples");
   for (const auto& p : rec.poses) d.t.push_back(rec.controls.ToSeconds(p.t_ns));
   d.t_ctrl0 = rec.controls.TimeAt(0);
@@ -155,12 +160,14 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   }
   if (d.t_ctrl0 > d.t.front() + 1.0) {
     std::ostringstream m;
-    m << "poses start " << d.t_ctrl0 - d.t.front() << " s before the first control; that part is not used";
+    m << "poses start " << d.t_ctrl0 - d.t.front()
+      << " s before the first control; that part is not used";
     warnings->push_back(m.str());
   }
   d.t_split = t0 + o.fit_fraction * (t1 - t0);
   d.sigma = o.pose_sigma ? *o.pose_sigma : EstimatePoseSigma(rec);
-  d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1]).asDiagonal();
+  d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1])
+            .asDiagonal();
   // Evaluation windows from (strided) measured poses; none straddles the split.
   const int first = static_cast<int>(std::lower_bound(d.t.begin(), d.t.end(), t0) - d.t.begin());
   const int n = static_cast<int>(d.t.size());
@@ -175,10 +182,16 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   d.fit_windows = NonOverlapping(d, o.horizon_s, t0, d.t_split, o.max_fit_windows);
   const double hs = std::max(0.2, 0.25 * o.horizon_s);
   d.short_windows = NonOverlapping(d, hs, t0, d.t_split, std::min(150, o.max_fit_windows));
-  if (d.fit_windows.size() < 5) throw AnalysisError(rec.source + ": fewer than 5 prediction windows in the fit part (gaps, or a recording shorter than a few horizons)");
+  if (d.fit_windows.size() < 5)
+    throw AnalysisError(rec.source +
+                        ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
+                        "shorter than a few horizons)");
   int held = 0;
   for (const auto& w : d.eval) held += d.t[static_cast<size_t>(w.start)] >= d.t_split;
-  if (held < 5) throw AnalysisError(rec.source + ": fewer than 5 prediction windows in the held-out part; lower --fit-fraction or --horizon");
+  if (held < 5)
+    throw AnalysisError(rec.source +
+                        ": fewer than 5 prediction windows in the held-out part; lower "
+                        "--fit-fraction or --horizon");
   d.fit_meas = WindowMeasurements(d, d.fit_windows, o.poses_per_window);
   d.short_meas = WindowMeasurements(d, d.short_windows, std::max(2, o.poses_per_window / 2));
   return d;
@@ -214,8 +227,11 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
       sww += tw.omega * std::abs(tw.omega);
       svw += tw.vx * tw.omega;
       mov += (std::abs(tw.vx) > 1e-3 * vmax || std::abs(tw.omega) > 1e-3 * wmax) ? 1.0 : 0.0;
-      smv += (std::abs(tw.vx) > 0 && std::abs(tw.vx) < 0.25 * vmax) ? (tw.vx > 0 ? 1.0 : -1.0) : 0.0;
-      smw += (std::abs(tw.omega) > 0 && std::abs(tw.omega) < 0.25 * wmax) ? (tw.omega > 0 ? 1.0 : -1.0) : 0.0;
+      smv +=
+          (std::abs(tw.vx) > 0 && std::abs(tw.vx) < 0.25 * vmax) ? (tw.vx > 0 ? 1.0 : -1.0) : 0.0;
+      smw += (std::abs(tw.omega) > 0 && std::abs(tw.omega) < 0.25 * wmax)
+                 ? (tw.omega > 0 ? 1.0 : -1.0)
+                 : 0.0;
     }
     const auto a = twist(ta), b = twist(tb);
     f.v["speed"] = sv / K;
@@ -329,14 +345,15 @@ Evaluation Evaluate(const System& sys, const Eigen::VectorXd& p, const Dataset& 
     x.segment(3, sys.num_params()) = p;
     if (!states.empty()) x.tail(sys.num_states()) = states[k].tail(sys.num_states());
     sys.SetPoseFromMeasurement(zs.data(), x.data());
-    sys.Propagate(x.data(), x.data(), d.t[static_cast<size_t>(w.start)], d.t[static_cast<size_t>(w.end)], u,
-                  static_cast<const double*>(nullptr));
+    sys.Propagate(x.data(), x.data(), d.t[static_cast<size_t>(w.start)],
+                  d.t[static_cast<size_t>(w.end)], u, static_cast<const double*>(nullptr));
     double zp[3];
     sys.Measure(x.data(), zp);
     const double ex = ze.x() - zp[0], ey = ze.y() - zp[1];
     const double c = std::cos(ze.z()), s = std::sin(ze.z());
-    ResidualPoint r{d.t[static_cast<size_t>(w.start)], d.t[static_cast<size_t>(w.start)] >= d.t_split,
-                    c * ex + s * ey, -s * ex + c * ey, WrapAngle(ze.z() - zp[2])};
+    ResidualPoint r{d.t[static_cast<size_t>(w.start)],
+                    d.t[static_cast<size_t>(w.start)] >= d.t_split, c * ex + s * ey,
+                    -s * ex + c * ey, WrapAngle(ze.z() - zp[2])};
     const int h = r.heldout ? 1 : 0;
     sp[h] += r.along * r.along + r.cross * r.cross;
     sh[h] += r.heading * r.heading;
@@ -364,7 +381,8 @@ std::vector<DiagnosisTerm> Diagnose(const Dataset& d, const Evaluation& e) {
   }
   if (fit_idx.size() < 10) return out;
   const double span = e.points[fit_idx.back()].t_s - e.points[fit_idx.front()].t_s;
-  const double n_eff = std::max(2.0, std::min<double>(static_cast<double>(fit_idx.size()), span / d.horizon));
+  const double n_eff =
+      std::max(2.0, std::min<double>(static_cast<double>(fit_idx.size()), span / d.horizon));
   for (int c = 0; c < 3; ++c) {
     std::vector<double> y;
     for (size_t k : fit_idx) {
@@ -397,7 +415,8 @@ std::vector<DiagnosisTerm> Diagnose(const Dataset& d, const Evaluation& e) {
       out.push_back(t);
     }
   }
-  std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return std::abs(a.z) > std::abs(b.z); });
+  std::sort(out.begin(), out.end(),
+            [](const auto& a, const auto& b) { return std::abs(a.z) > std::abs(b.z); });
   return out;
 }
 
@@ -427,7 +446,8 @@ ResidualTests Test(const Evaluation& e, double horizon) {
     const int lags = std::min(10, n / 4);
     for (int k = 1; k <= lags; ++k) {
       double ac = 0;
-      for (int i = k; i < n; ++i) ac += (y[static_cast<size_t>(i)] - m) * (y[static_cast<size_t>(i - k)] - m);
+      for (int i = k; i < n; ++i)
+        ac += (y[static_cast<size_t>(i)] - m) * (y[static_cast<size_t>(i - k)] - m);
       ac = v > 0 ? ac / (n * v) : 0.0;
       if (k == 1) t.lag1_autocorr[c] = ac;
       q += ac * ac / (n - k);
@@ -478,7 +498,8 @@ std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, 
     const auto& pi = sys.params()[static_cast<size_t>(i)];
     ParamEstimate e{pi.name, pi.unit, f.p[i], NAN, NAN};
     if (f.cov_robust.rows() == f.p.size()) e.sigma = std::sqrt(std::max(0.0, f.cov_robust(i, i)));
-    if (f.cov_model.rows() == f.p.size()) e.sigma_model = std::sqrt(std::max(0.0, f.cov_model(i, i)));
+    if (f.cov_model.rows() == f.p.size())
+      e.sigma_model = std::sqrt(std::max(0.0, f.cov_model(i, i)));
     out.push_back(e);
   }
   return out;
@@ -506,7 +527,8 @@ std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
     std::string msg = "parameter '" + pi.name + "' is not identifiable from this recording";
     std::string others;
     for (int i = 0; i < np; ++i) {
-      if (i != imax && std::abs(v[i]) > 0.3 * std::abs(v[imax])) others += (others.empty() ? "" : ", ") + sys.params()[static_cast<size_t>(i)].name;
+      if (i != imax && std::abs(v[i]) > 0.3 * std::abs(v[imax]))
+        others += (others.empty() ? "" : ", ") + sys.params()[static_cast<size_t>(i)].name;
     }
     if (!others.empty()) msg += " (it trades off against " + others + ")";
     if (!pi.excitation.empty()) msg += "; excite it with " + pi.excitation;
@@ -517,7 +539,8 @@ std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
 
 Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init) {
   Eigen::VectorXd p(sys.num_params());
-  for (int i = 0; i < sys.num_params(); ++i) p[i] = sys.params()[static_cast<size_t>(i)].default_value;
+  for (int i = 0; i < sys.num_params(); ++i)
+    p[i] = sys.params()[static_cast<size_t>(i)].default_value;
   for (const auto& [name, v] : init) {
     const int i = sys.ParamIndex(name);
     if (i < 0) {
@@ -541,14 +564,17 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  auto is_scale = [&](int i) { return sys.params()[static_cast<size_t>(i)].default_value != 0.0 && p0[i] != 0.0; };
+  auto is_scale = [&](int i) {
+    return sys.params()[static_cast<size_t>(i)].default_value != 0.0 && p0[i] != 0.0;
+  };
   for (int i = 0; i < np; ++i) {
     for (double f : {0.2, 0.5, 2.0, 5.0}) {
       Eigen::VectorXd s = p0;
       if (is_scale(i)) {
         s[i] *= f;
       } else {
-        s[i] += (f < 1.0 ? -1.0 : 1.0) * (f == 0.5 || f == 2.0 ? 1.0 : 3.0) * sys.params()[static_cast<size_t>(i)].default_sigma;
+        s[i] += (f < 1.0 ? -1.0 : 1.0) * (f == 0.5 || f == 2.0 ? 1.0 : 3.0) *
+                sys.params()[static_cast<size_t>(i)].default_sigma;
       }
       starts.push_back(s);
     }
@@ -566,18 +592,25 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
   }
   std::vector<Fit> stage1;
   for (size_t k = 0; k < starts.size(); ++k) {
-    if (o.progress) o.progress(0.05 + 0.2 * static_cast<double>(k) / static_cast<double>(starts.size()), "baseline: multi-start");
+    if (o.progress)
+      o.progress(0.05 + 0.2 * static_cast<double>(k) / static_cast<double>(starts.size()),
+                 "baseline: multi-start");
     Fit f = RunFit(sys, u, d.short_meas, starts[k], false, o.num_threads, 40);
     if (f.ok) stage1.push_back(std::move(f));
   }
-  if (stage1.empty()) throw AnalysisError("baseline fit failed from every start: check that the controls drive the model (units, column order)");
-  std::sort(stage1.begin(), stage1.end(), [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
+  if (stage1.empty())
+    throw AnalysisError(
+        "baseline fit failed from every start: check that the controls drive the model (units, "
+        "column order)");
+  std::sort(stage1.begin(), stage1.end(),
+            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
   // Refine the best few distinct optima on the full windows.
   std::vector<Fit> refined;
   for (size_t k = 0; k < stage1.size() && refined.size() < 3; ++k) {
     bool distinct = true;
     for (const auto& r : refined) {
-      if (((stage1[k].p - r.p).array().abs() <= 1e-3 * (r.p.array().abs() + 1e-6)).all()) distinct = false;
+      if (((stage1[k].p - r.p).array().abs() <= 1e-3 * (r.p.array().abs() + 1e-6)).all())
+        distinct = false;
     }
     if (!distinct && k > 0) continue;
     if (stage1[k].cost > 1.5 * stage1[0].cost + 10.0) break;
@@ -585,7 +618,8 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     if (f.ok) refined.push_back(std::move(f));
   }
   if (refined.empty()) throw AnalysisError("baseline refinement failed");
-  std::sort(refined.begin(), refined.end(), [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
+  std::sort(refined.begin(), refined.end(),
+            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
   Fit best = refined.front();
   report->unique = true;
   for (size_t k = 1; k < refined.size(); ++k) {
@@ -593,13 +627,15 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     if (alt.cost > best.cost * 1.01 + 2.0) continue;  // clearly worse
     bool differs = false;
     for (int i = 0; i < np && best.cov_robust.rows() == np; ++i) {
-      if (std::abs(alt.p[i] - best.p[i]) > 5.0 * std::sqrt(std::max(best.cov_robust(i, i), 1e-300))) differs = true;
+      if (std::abs(alt.p[i] - best.p[i]) > 5.0 * std::sqrt(std::max(best.cov_robust(i, i), 1e-300)))
+        differs = true;
     }
     if (differs) {
       report->unique = false;
       std::ostringstream m;
       m << "another optimum fits as well (cost " << alt.cost << " vs " << best.cost << "):";
-      for (int i = 0; i < np; ++i) m << " " << sys.params()[static_cast<size_t>(i)].name << "=" << alt.p[i];
+      for (int i = 0; i < np; ++i)
+        m << " " << sys.params()[static_cast<size_t>(i)].name << "=" << alt.p[i];
       report->uniqueness = m.str();
     }
   }
@@ -718,7 +754,10 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
     std::vector<Tried> tried;
     for (size_t c = 0; c < candidates.size(); ++c) {
       const std::string& spec = candidates[c];
-      progress(0.3 + 0.6 * ((round - 1) + static_cast<double>(c) / static_cast<double>(candidates.size())) / o.max_effects,
+      progress(0.3 + 0.6 *
+                         ((round - 1) +
+                          static_cast<double>(c) / static_cast<double>(candidates.size())) /
+                         o.max_effects,
                "round " + std::to_string(round) + ": " + spec);
       if (std::find(accepted.begin(), accepted.end(), spec) != accepted.end()) continue;
       std::shared_ptr<const Effect> eff;
@@ -753,7 +792,8 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
                                (eff->time_varying() && std::abs(command_lag) > 0.05))) {
         // Timing: start at the lag the cross-correlation found (a delay or a lag's tau).
         Eigen::VectorXd s = s0;
-        s[np - 1] = eff->stage() == EffectStage::kControlTiming ? command_lag : std::abs(command_lag);
+        s[np - 1] =
+            eff->stage() == EffectStage::kControlTiming ? command_lag : std::abs(command_lag);
         starts.push_back(s);
       }
       if (np - old_np == 1) {
@@ -778,18 +818,22 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
       // effective number of independent residuals (AR(1) design effect of the larger
       // model, never fewer than one per window).
       const double n_eff = std::max(nw, best.n_eff);
-      t.trial.delta_bic = n_eff * std::log(std::max(best.cost, 1e-300) / std::max(current.cost, 1e-300)) +
-                          k * std::log(n_eff);
-      t.trial.heldout_gain = 1.0 - t.eval.held.pos_rms_m / std::max(current_eval.held.pos_rms_m, 1e-300);
-      t.trial.combined_gain = 1.0 - Combined(t.eval.held, d.sigma) / std::max(Combined(current_eval.held, d.sigma), 1e-300);
+      t.trial.delta_bic =
+          n_eff * std::log(std::max(best.cost, 1e-300) / std::max(current.cost, 1e-300)) +
+          k * std::log(n_eff);
+      t.trial.heldout_gain =
+          1.0 - t.eval.held.pos_rms_m / std::max(current_eval.held.pos_rms_m, 1e-300);
+      t.trial.combined_gain = 1.0 - Combined(t.eval.held, d.sigma) /
+                                        std::max(Combined(current_eval.held, d.sigma), 1e-300);
       t.trial.params = Estimates(*sys, best, old_np, np);
       const bool observable = Unobservable(*sys, best).empty();
       std::ostringstream ev;
       ev.precision(3);
-      ev << "signature z=" << t.trial.signature_z << "; fit cost " << (best.cost / current.cost - 1.0) * 100.0
-         << " %, dBIC " << t.trial.delta_bic << "; held-out position RMS " << current_eval.held.pos_rms_m << " -> "
-         << t.eval.held.pos_rms_m << " m, heading RMS " << current_eval.held.heading_rms_rad << " -> "
-         << t.eval.held.heading_rms_rad << " rad";
+      ev << "signature z=" << t.trial.signature_z << "; fit cost "
+         << (best.cost / current.cost - 1.0) * 100.0 << " %, dBIC " << t.trial.delta_bic
+         << "; held-out position RMS " << current_eval.held.pos_rms_m << " -> "
+         << t.eval.held.pos_rms_m << " m, heading RMS " << current_eval.held.heading_rms_rad
+         << " -> " << t.eval.held.heading_rms_rad << " rad";
       if (!observable) ev << "; not identifiable together with the model's parameters";
       t.trial.evidence = ev.str();
       t.ok = observable;
@@ -815,7 +859,8 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   }
   progress(0.95, "report");
   const System final_sys(model, accepted_effects);
-  res.after = MakeReport(final_sys, current, current_eval, accepted, static_cast<int>(d.fit_windows.size()));
+  res.after = MakeReport(final_sys, current, current_eval, accepted,
+                         static_cast<int>(d.fit_windows.size()));
   res.diagnosis_after = diag;
   res.tests_after = Test(current_eval, o.horizon_s);
   progress(1.0, "done");

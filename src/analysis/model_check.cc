@@ -1,7 +1,5 @@
 #include "kincal/analysis/model_check.h"
 
-#include <kincal/model_check_t.hpp>
-
 #include <cmath>
 #include <sstream>
 
@@ -33,11 +31,17 @@ void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& st
   const double* p = state.data() + sys_.param_offset();
   const Twist<double> now = sys_.model().BodyTwist(p, u.At(t).data());
   const Twist<double> before = sys_.model().BodyTwist(p, u.At(t - options_.lookback_s).data());
-  const double values[kNumSeries] = {
-      c * ix + s * iy, -s * ix + c * iy, update.innovation[2], now.vx - before.vx,
-      now.omega - before.omega, now.omega, std::abs(now.omega),
-      (std::abs(now.vx) + std::abs(now.omega)) > 1e-9 ? 1.0 : 0.0, update.nis};
-  for (int k = 0; k < kNumSeries; ++k) data_[static_cast<size_t>(k)][static_cast<size_t>(next_)] = values[k];
+  const double values[kNumSeries] = {c * ix + s * iy,
+                                     -s * ix + c * iy,
+                                     update.innovation[2],
+                                     now.vx - before.vx,
+                                     now.omega - before.omega,
+                                     now.omega,
+                                     std::abs(now.omega),
+                                     (std::abs(now.vx) + std::abs(now.omega)) > 1e-9 ? 1.0 : 0.0,
+                                     update.nis};
+  for (int k = 0; k < kNumSeries; ++k)
+    data_[static_cast<size_t>(k)][static_cast<size_t>(next_)] = values[k];
   next_ = (next_ + 1) % kWindow;
   if (count_ < kWindow) ++count_;
 }
@@ -56,12 +60,14 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     const double my = mean(y), mx = mean(x);
     double sxy = 0, sxx = 0, syy = 0;
     for (int i = 0; i < n; ++i) {
-      const double a = data_[x][static_cast<size_t>(i)] - mx, b = data_[y][static_cast<size_t>(i)] - my;
+      const double a = data_[x][static_cast<size_t>(i)] - mx,
+                   b = data_[y][static_cast<size_t>(i)] - my;
       sxy += a * b;
       sxx += a * a;
       syy += b * b;
     }
-    return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) * std::sqrt(static_cast<double>(n)) : 0.0;
+    return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) * std::sqrt(static_cast<double>(n))
+                                : 0.0;
   };
   v.nis_mean = mean(kNis);
   if (count_ < options_.min_samples) return v;
@@ -78,7 +84,8 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   if (moving > 10) {
     hm /= moving;
     for (int i = 0; i < n; ++i) {
-      if (data_[kMoving][static_cast<size_t>(i)] > 0.5) hs += std::pow(data_[kHeading][static_cast<size_t>(i)] - hm, 2);
+      if (data_[kMoving][static_cast<size_t>(i)] > 0.5)
+        hs += std::pow(data_[kHeading][static_cast<size_t>(i)] - hm, 2);
     }
     hs = std::sqrt(hs / moving);
     bias_z = hs > 0 ? hm / (hs / std::sqrt(static_cast<double>(moving))) : 0.0;
@@ -98,7 +105,9 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   };
   const Candidate* best = nullptr;
   for (const auto& c : candidates) {
-    if (std::abs(c.z) >= options_.z_threshold && (best == nullptr || std::abs(c.z) > std::abs(best->z))) best = &c;
+    if (std::abs(c.z) >= options_.z_threshold &&
+        (best == nullptr || std::abs(c.z) > std::abs(best->z)))
+      best = &c;
   }
   const bool nis_ok = v.nis_mean < 3.0 * v.nis_expected;
   v.consistent = best == nullptr && nis_ok;
@@ -117,21 +126,6 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   ev << "; window " << n << " updates";
   v.evidence = ev.str();
   return v;
-}
-
-model_check_t ToMessage(const ModelCheckVerdict& v, const std::string& model, int64_t utime) {
-  model_check_t m{};
-  m.schema_version = 1;
-  m.utime = utime;
-  m.model = model;
-  m.consistent = v.consistent ? 1 : 0;
-  m.nis_mean = v.nis_mean;
-  m.nis_expected = v.nis_expected;
-  m.window = v.window;
-  m.suspected_effect = v.suspected_effect;
-  m.confidence = v.confidence;
-  m.evidence = v.evidence;
-  return m;
 }
 
 }  // namespace kincal

@@ -14,7 +14,8 @@ using nlohmann::json;
 json ParamsJson(const std::vector<ParamEstimate>& ps) {
   json j = json::object();
   for (const auto& p : ps) {
-    j[p.name] = {{"value", p.value}, {"sigma", p.sigma}, {"sigma_white", p.sigma_model}, {"unit", p.unit}};
+    j[p.name] = {
+        {"value", p.value}, {"sigma", p.sigma}, {"sigma_white", p.sigma_model}, {"unit", p.unit}};
   }
   return j;
 }
@@ -23,8 +24,12 @@ json FitJson(const FitReport& f) {
   json j;
   j["params"] = ParamsJson(f.params);
   j["effects"] = f.effects;
-  j["fit"] = {{"pos_rms_m", f.fit.pos_rms_m}, {"heading_rms_rad", f.fit.heading_rms_rad}, {"windows", f.fit.windows}};
-  j["heldout"] = {{"pos_rms_m", f.heldout.pos_rms_m}, {"heading_rms_rad", f.heldout.heading_rms_rad}, {"windows", f.heldout.windows}};
+  j["fit"] = {{"pos_rms_m", f.fit.pos_rms_m},
+              {"heading_rms_rad", f.fit.heading_rms_rad},
+              {"windows", f.fit.windows}};
+  j["heldout"] = {{"pos_rms_m", f.heldout.pos_rms_m},
+                  {"heading_rms_rad", f.heldout.heading_rms_rad},
+                  {"windows", f.heldout.windows}};
   j["cost"] = f.cost;
   j["fit_windows"] = f.fit_windows;
   j["unique"] = f.unique;
@@ -36,7 +41,10 @@ json FitJson(const FitReport& f) {
 json DiagJson(const std::vector<DiagnosisTerm>& d, size_t top) {
   json j = json::array();
   for (size_t i = 0; i < d.size() && i < top; ++i) {
-    j.push_back({{"component", d[i].component}, {"regressor", d[i].regressor}, {"r", d[i].r}, {"z", d[i].z}});
+    j.push_back({{"component", d[i].component},
+                 {"regressor", d[i].regressor},
+                 {"r", d[i].r},
+                 {"z", d[i].z}});
   }
   return j;
 }
@@ -45,7 +53,9 @@ json TestsJson(const ResidualTests& t) {
   json j;
   const char* c[3] = {"along", "cross", "heading"};
   for (int i = 0; i < 3; ++i) {
-    j[c[i]] = {{"bias_z", t.bias_z[i]}, {"lag1_autocorr", t.lag1_autocorr[i]}, {"ljung_box_p", t.ljung_box_p[i]}};
+    j[c[i]] = {{"bias_z", t.bias_z[i]},
+               {"lag1_autocorr", t.lag1_autocorr[i]},
+               {"ljung_box_p", t.ljung_box_p[i]}};
   }
   return j;
 }
@@ -58,8 +68,8 @@ std::string Html(const AnalyzeResult& r) {
        "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;"
        "text-align:right}th{background:#eee}td:first-child{text-align:left}.acc{background:#dfd}"
        "img{max-width:100%}</style></head><body>";
-  h << "<h1>kincal analysis: " << r.model << "</h1><p>" << r.source << "<br>fit span " << r.t_begin_s
-    << " .. " << r.t_split_s << " s, held out " << r.t_split_s << " .. " << r.t_end_s
+  h << "<h1>kincal analysis: " << r.model << "</h1><p>" << r.source << "<br>fit span "
+    << r.t_begin_s << " .. " << r.t_split_s << " s, held out " << r.t_split_s << " .. " << r.t_end_s
     << " s; horizon " << r.horizon_s << " s; residual weights: position " << r.pose_sigma[0] * 1e3
     << " mm, heading " << r.pose_sigma[1] * 1e3 << " mrad ("
     << (r.pose_sigma_estimated ? "estimated from the data" : "given") << ")</p>";
@@ -70,11 +80,13 @@ std::string Html(const AnalyzeResult& r) {
   row("fit position RMS [m]", r.before.fit.pos_rms_m, r.after.fit.pos_rms_m);
   row("fit heading RMS [rad]", r.before.fit.heading_rms_rad, r.after.fit.heading_rms_rad);
   row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
-  row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad, r.after.heldout.heading_rms_rad);
+  row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
+      r.after.heldout.heading_rms_rad);
   h << "</table><p>Effects added: ";
   for (const auto& e : r.after.effects) h << "<b>" << e << "</b> ";
   if (r.after.effects.empty()) h << "none";
-  h << "</p><h2>Parameters</h2><table><tr><th>parameter</th><th>before</th><th>after</th><th>unit</th></tr>";
+  h << "</p><h2>Parameters</h2><table><tr><th>parameter</th><th>before</th><th>after</th><th>unit</"
+       "th></tr>";
   for (const auto& p : r.after.params) {
     h << "<tr><td>" << p.name << "</td><td>";
     for (const auto& q : r.before.params) {
@@ -88,14 +100,17 @@ std::string Html(const AnalyzeResult& r) {
        "<th>ΔBIC</th><th>parameters</th><th>evidence</th></tr>";
   for (const auto& t : r.trials) {
     h << "<tr" << (t.accepted ? " class='acc'" : "") << "><td>" << t.round << "</td><td>" << t.name
-      << (t.accepted ? " ✔" : "") << "</td><td>" << t.heldout_gain << "</td><td>" << t.delta_bic << "</td><td>";
+      << (t.accepted ? " ✔" : "") << "</td><td>" << t.heldout_gain << "</td><td>" << t.delta_bic
+      << "</td><td>";
     for (const auto& p : t.params) h << p.name << "=" << p.value << "±" << p.sigma << " ";
     h << "</td><td style='text-align:left'>" << t.evidence << "</td></tr>";
   }
-  h << "</table><h2>Diagnosis of the residual before</h2><table><tr><th>component</th><th>regressor</th><th>r</th><th>z</th></tr>";
+  h << "</table><h2>Diagnosis of the residual "
+       "before</h2><table><tr><th>component</th><th>regressor</th><th>r</th><th>z</th></tr>";
   for (size_t i = 0; i < r.diagnosis_before.size() && i < 10; ++i) {
     const auto& t = r.diagnosis_before[i];
-    h << "<tr><td>" << t.component << "</td><td>" << t.regressor << "</td><td>" << t.r << "</td><td>" << t.z << "</td></tr>";
+    h << "<tr><td>" << t.component << "</td><td>" << t.regressor << "</td><td>" << t.r
+      << "</td><td>" << t.z << "</td></tr>";
   }
   h << "</table>";
   if (!r.warnings.empty()) {
@@ -118,21 +133,31 @@ void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   j["after"] = FitJson(r.after);
   json effects = json::array();
   for (const auto& t : r.trials) {
-    effects.push_back({{"name", t.name}, {"round", t.round}, {"accepted", t.accepted},
-                       {"params", ParamsJson(t.params)}, {"heldout_gain", t.heldout_gain},
-                       {"combined_gain", t.combined_gain}, {"delta_bic", t.delta_bic},
-                       {"signature_z", t.signature_z}, {"evidence", t.evidence}});
+    effects.push_back({{"name", t.name},
+                       {"round", t.round},
+                       {"accepted", t.accepted},
+                       {"params", ParamsJson(t.params)},
+                       {"heldout_gain", t.heldout_gain},
+                       {"combined_gain", t.combined_gain},
+                       {"delta_bic", t.delta_bic},
+                       {"signature_z", t.signature_z},
+                       {"evidence", t.evidence}});
   }
   j["effects"] = effects;
-  j["weights"] = {{"pos_sigma_m", r.pose_sigma[0]}, {"heading_sigma_rad", r.pose_sigma[1]},
+  j["weights"] = {{"pos_sigma_m", r.pose_sigma[0]},
+                  {"heading_sigma_rad", r.pose_sigma[1]},
                   {"estimated", r.pose_sigma_estimated},
-                  {"note", "residuals are weighted by 1/sigma^2 per component (x, y: pos_sigma_m; theta: heading_sigma_rad)"}};
+                  {"note",
+                   "residuals are weighted by 1/sigma^2 per component (x, y: pos_sigma_m; theta: "
+                   "heading_sigma_rad)"}};
   j["span_s"] = {{"begin", r.t_begin_s}, {"split", r.t_split_s}, {"end", r.t_end_s}};
   j["horizon_s"] = r.horizon_s;
-  j["diagnosis"] = {{"before", DiagJson(r.diagnosis_before, 12)}, {"after", DiagJson(r.diagnosis_after, 12)}};
+  j["diagnosis"] = {{"before", DiagJson(r.diagnosis_before, 12)},
+                    {"after", DiagJson(r.diagnosis_after, 12)}};
   j["tests"] = {{"before", TestsJson(r.tests_before)}, {"after", TestsJson(r.tests_after)}};
   j["warnings"] = r.warnings;
-  j["input"] = {{"control_rows", r.stats.control_rows}, {"pose_rows", r.stats.pose_rows},
+  j["input"] = {{"control_rows", r.stats.control_rows},
+                {"pose_rows", r.stats.pose_rows},
                 {"control_repeated_times", r.stats.control_repeated_times},
                 {"pose_repeated_times", r.stats.pose_repeated_times}};
   std::ofstream(dir + "/report.json") << j.dump(2) << "\n";
@@ -140,7 +165,8 @@ void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   csv << "step,t_s,heldout,along_m,cross_m,heading_rad\n" << std::setprecision(9);
   for (const auto& [step, pts] : r.residual_steps) {
     for (const auto& p : pts) {
-      csv << step << "," << p.t_s << "," << (p.heldout ? 1 : 0) << "," << p.along << "," << p.cross << "," << p.heading << "\n";
+      csv << step << "," << p.t_s << "," << (p.heldout ? 1 : 0) << "," << p.along << "," << p.cross
+          << "," << p.heading << "\n";
     }
   }
   std::ofstream(dir + "/report.html") << Html(r);

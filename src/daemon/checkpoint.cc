@@ -29,7 +29,8 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
   j["values"] = c.values;
   std::vector<std::vector<double>> cov(static_cast<size_t>(c.covariance.rows()));
   for (int i = 0; i < c.covariance.rows(); ++i) {
-    for (int k = 0; k < c.covariance.cols(); ++k) cov[static_cast<size_t>(i)].push_back(c.covariance(i, k));
+    for (int k = 0; k < c.covariance.cols(); ++k)
+      cov[static_cast<size_t>(i)].push_back(c.covariance(i, k));
   }
   j["covariance"] = cov;
   const std::string text = j.dump(1);
@@ -47,7 +48,8 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
     }
     done += static_cast<size_t>(n);
   }
-  if (::fsync(fd) != 0 || ::close(fd) != 0) throw std::runtime_error(tmp + ": cannot sync checkpoint");
+  if (::fsync(fd) != 0 || ::close(fd) != 0)
+    throw std::runtime_error(tmp + ": cannot sync checkpoint");
   if (::rename(tmp.c_str(), path.c_str()) != 0) {
     throw std::runtime_error(path + ": cannot replace checkpoint: " + std::strerror(errno));
   }
@@ -64,8 +66,10 @@ Checkpoint ReadCheckpoint(const std::string& path) {
   }
   Checkpoint c;
   try {
-    if (j.at("format") != "kincal-checkpoint") throw std::runtime_error("format is not kincal-checkpoint");
-    if (j.at("version") != 1) throw std::runtime_error("unsupported version " + j.at("version").dump());
+    if (j.at("format") != "kincal-checkpoint")
+      throw std::runtime_error("format is not kincal-checkpoint");
+    if (j.at("version") != 1)
+      throw std::runtime_error("unsupported version " + j.at("version").dump());
     c.model = j.at("model").get<std::string>();
     c.effects = j.at("effects").get<std::vector<std::string>>();
     c.filter = j.at("filter").get<std::string>();
@@ -81,9 +85,12 @@ Checkpoint ReadCheckpoint(const std::string& path) {
     }
     c.covariance.resize(static_cast<int>(n), static_cast<int>(n));
     for (size_t i = 0; i < n; ++i) {
-      if (cov[i].size() != n) throw std::runtime_error("covariance row " + std::to_string(i) + " has the wrong length");
-      for (size_t k = 0; k < n; ++k) c.covariance(static_cast<int>(i), static_cast<int>(k)) = cov[i][k];
-      if (!std::isfinite(c.values[i])) throw std::runtime_error("value of '" + c.names[i] + "' is not finite");
+      if (cov[i].size() != n)
+        throw std::runtime_error("covariance row " + std::to_string(i) + " has the wrong length");
+      for (size_t k = 0; k < n; ++k)
+        c.covariance(static_cast<int>(i), static_cast<int>(k)) = cov[i][k];
+      if (!std::isfinite(c.values[i]))
+        throw std::runtime_error("value of '" + c.names[i] + "' is not finite");
     }
     if (!c.covariance.allFinite()) throw std::runtime_error("covariance is not finite");
   } catch (const nlohmann::json::exception& e) {
@@ -102,14 +109,16 @@ void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& 
   for (size_t i = 0; i < c.effects.size(); ++i) out << (i ? ", " : "") << c.effects[i];
   out << "]\nupdated_utime: " << c.utime << "\nparameters:\n" << std::setprecision(9);
   for (size_t i = 0; i < c.names.size(); ++i) {
-    const double s = std::sqrt(std::max(0.0, c.covariance(static_cast<int>(i), static_cast<int>(i))));
-    out << "  " << c.names[i] << ": {value: " << c.values[i] << ", sigma: " << std::setprecision(3) << s
-        << std::setprecision(9) << ", unit: \"" << c.units[i] << "\"}\n";
+    const double s =
+        std::sqrt(std::max(0.0, c.covariance(static_cast<int>(i), static_cast<int>(i))));
+    out << "  " << c.names[i] << ": {value: " << c.values[i] << ", sigma: " << std::setprecision(3)
+        << s << std::setprecision(9) << ", unit: \"" << c.units[i] << "\"}\n";
   }
   out << "covariance:   # row-major, in the order of 'parameters'\n";
   for (int i = 0; i < c.covariance.rows(); ++i) {
     out << "  - [";
-    for (int k = 0; k < c.covariance.cols(); ++k) out << (k ? ", " : "") << std::setprecision(6) << c.covariance(i, k);
+    for (int k = 0; k < c.covariance.cols(); ++k)
+      out << (k ? ", " : "") << std::setprecision(6) << c.covariance(i, k);
     out << "]\n";
   }
 }

@@ -3,6 +3,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <array>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
@@ -14,13 +15,53 @@
 namespace kincal::daemon {
 namespace {
 
+template <typename E>
+struct Named {
+  std::string_view name;
+  E value;
+};
+constexpr std::array<Named<SourceKind>, 4> kSourceNames{{{"sim", SourceKind::kSim},
+                                                         {"v4l2", SourceKind::kV4l2},
+                                                         {"libcamera", SourceKind::kLibcamera},
+                                                         {"replay", SourceKind::kReplay}}};
+constexpr std::array<Named<PoseMethod>, 2> kPoseMethodNames{
+    {{"ground_plane", PoseMethod::kGroundPlane}, {"lowe", PoseMethod::kLowe}}};
+constexpr std::array<Named<ControlStamp>, 2> kControlStampNames{
+    {{"receive", ControlStamp::kReceive}, {"sender", ControlStamp::kSender}}};
+constexpr std::array<Named<FrameEncoding>, 2> kFrameEncodingNames{
+    {{"raw", FrameEncoding::kRaw}, {"png", FrameEncoding::kPng}}};
+// Pixel formats a camera can be asked for (PNG is only a recorded frame's encoding).
+constexpr std::array<Named<PixelFormat>, 5> kCameraFormatNames{{{"GREY", PixelFormat::kGrey},
+                                                                {"YUYV", PixelFormat::kYuyv},
+                                                                {"MJPG", PixelFormat::kMjpeg},
+                                                                {"BGR3", PixelFormat::kBgr24},
+                                                                {"RGB3", PixelFormat::kRgb24}}};
+
+template <typename E, size_t N>
+std::string_view NameOf(const std::array<Named<E>, N>& table, E value) {
+  for (const auto& n : table) {
+    if (n.value == value) return n.name;
+  }
+  return "?";
+}
+
+template <typename E, size_t N>
+std::string NameList(const std::array<Named<E>, N>& table) {
+  std::string list;
+  for (size_t i = 0; i < N; ++i) {
+    list += (i == 0 ? "" : (i + 1 == N ? " or " : ", ")) + std::string(table[i].name);
+  }
+  return list;
+}
+
 // One YAML map: typed reads that name file:line on error, and a check that every key in
 // the file was one we know.
 class Section {
  public:
   Section(YAML::Node node, std::string file, std::string prefix)
       : node_(std::move(node)), file_(std::move(file)), prefix_(std::move(prefix)) {
-    if (node_ && !node_.IsMap()) throw std::runtime_error(Where(node_) + ": '" + prefix_ + "' must be a map");
+    if (node_ && !node_.IsMap())
+      throw std::runtime_error(Where(node_) + ": '" + prefix_ + "' must be a map");
   }
   template <typename T>
   void Get(const std::string& key, T* out) {
@@ -31,6 +72,21 @@ class Section {
     } catch (const YAML::Exception& e) {
       throw std::runtime_error(Where(node_[key]) + ": key '" + prefix_ + key + "': " + e.msg);
     }
+  }
+  // One of a fixed set of names, turned into its enum value here, once.
+  template <typename E, size_t N>
+  void Choice(const std::string& key, E* out, const std::array<Named<E>, N>& table) {
+    std::string name;
+    Get(key, &name);
+    if (name.empty()) return;
+    for (const auto& n : table) {
+      if (n.name == name) {
+        *out = n.value;
+        return;
+      }
+    }
+    throw std::runtime_error(Where(node_[key]) + ": key '" + prefix_ + key + "': expected " +
+                             NameList(table) + ", got '" + name + "'");
   }
   void Path(const std::string& key, std::string* out, const std::string& base_dir) {
     Get(key, out);
@@ -49,21 +105,20 @@ class Section {
       if (!known_.count(key)) {
         std::string list;
         for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
-        throw std::runtime_error(Where(kv.first) + ": unknown key '" + prefix_ + key + "' (expected one of: " + list + ")");
+        throw std::runtime_error(Where(kv.first) + ": unknown key '" + prefix_ + key +
+                                 "' (expected one of: " + list + ")");
       }
     }
   }
 
  private:
-  std::string Where(const YAML::Node& n) const { return file_ + ":" + std::to_string(n.Mark().line + 1); }
+  std::string Where(const YAML::Node& n) const {
+    return file_ + ":" + std::to_string(n.Mark().line + 1);
+  }
   YAML::Node node_;
   std::string file_, prefix_;
   std::set<std::string> known_;
 };
-
-void Require(bool ok, const std::string& what) {
-  if (!ok) throw std::runtime_error("config: " + what);
-}
 
 }  // namespace
 
@@ -81,7 +136,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   DaemonConfig c;
   c.file = path;
   Section top(root, path, "");
-  top.Get("source", &c.source);
+  top.Choice("source", &c.source, kSourceNames);
   top.Get("health_rate_hz", &c.health_rate_hz);
   {
     auto s = top.Sub("lcm");
@@ -102,7 +157,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("device", &c.v4l2.device);
     s.Get("width", &c.v4l2.width);
     s.Get("height", &c.v4l2.height);
-    s.Get("pixel_format", &c.v4l2.pixel_format);
+    s.Choice("pixel_format", &c.v4l2.pixel_format, kCameraFormatNames);
     s.Get("fps", &c.v4l2.fps);
     s.Get("buffers", &c.v4l2.buffers);
     s.Get("controls", &c.v4l2.controls);
@@ -113,7 +168,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("camera", &c.libcamera.camera);
     s.Get("width", &c.libcamera.width);
     s.Get("height", &c.libcamera.height);
-    s.Get("pixel_format", &c.libcamera.pixel_format);
+    s.Choice("pixel_format", &c.libcamera.pixel_format, kCameraFormatNames);
     s.Get("buffers", &c.libcamera.buffers);
     s.CheckUnknown();
   }
@@ -164,7 +219,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   }
   {
     auto s = top.Sub("pose");
-    s.Get("method", &c.pose.method);
+    s.Choice("method", &c.pose.method, kPoseMethodNames);
     s.Get("sigma_px", &c.pose.sigma_px);
     s.Get("max_rms_px", &c.pose.max_rms_px);
     s.CheckUnknown();
@@ -175,7 +230,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("effects", &c.robot.effects);
     s.Get("guess", &c.robot.guess);
     s.Get("guess_sigma_fraction", &c.robot.guess_sigma_fraction);
-    s.Get("control_stamp", &c.robot.control_stamp);
+    s.Choice("control_stamp", &c.robot.control_stamp, kControlStampNames);
     s.Get("max_control_delay_s", &c.robot.max_control_delay_s);
     s.CheckUnknown();
   }
@@ -186,7 +241,8 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     std::vector<double> psd;
     s.Get("pose_psd", &psd);
     if (!psd.empty()) {
-      if (psd.size() != 3) throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
+      if (psd.size() != 3)
+        throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
       c.filter.pose_psd = {psd[0], psd[1], psd[2]};
     }
     s.Get("max_pose_gap_s", &c.filter.max_pose_gap_s);
@@ -208,7 +264,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   {
     auto s = top.Sub("record");
     s.Get("path", &c.record.path);
-    s.Get("frame_encoding", &c.record.frame_encoding);
+    s.Choice("frame_encoding", &c.record.frame_encoding, kFrameEncodingNames);
     s.Get("flush_every_s", &c.record.flush_every_s);
     s.CheckUnknown();
   }
@@ -223,87 +279,184 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   return c;
 }
 
-void Validate(const DaemonConfig& c) {
-  static const std::set<std::string> kSources = {"sim", "v4l2", "libcamera", "replay"};
-  Require(kSources.count(c.source) > 0, "source must be sim, v4l2, libcamera or replay (got '" + c.source + "')");
-  Require(c.health_rate_hz > 0, "health_rate_hz must be > 0");
-  for (const auto* ch : {&c.lcm.controls_channel, &c.lcm.pose_channel, &c.lcm.params_channel,
-                         &c.lcm.health_channel, &c.lcm.model_check_channel, &c.lcm.markers_channel,
-                         &c.lcm.frame_channel}) {
-    Require(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters");
-  }
-  if (c.source == "v4l2") {
-    Require(c.v4l2.width > 0 && c.v4l2.height > 0, "v4l2.width/height must be > 0");
-    Require(c.v4l2.fps > 0, "v4l2.fps must be > 0");
-    Require(c.v4l2.buffers >= 4 && c.v4l2.buffers <= 32, "v4l2.buffers must be 4..32");
-    Require(c.v4l2.pixel_format == "GREY" || c.v4l2.pixel_format == "YUYV" || c.v4l2.pixel_format == "MJPG",
-            "v4l2.pixel_format must be GREY, YUYV or MJPG (got '" + c.v4l2.pixel_format + "')");
-  }
-  if (c.source == "libcamera") {
-    Require(c.libcamera.width > 0 && c.libcamera.height > 0, "libcamera.width/height must be > 0");
-    Require(c.libcamera.buffers >= 2 && c.libcamera.buffers <= 32, "libcamera.buffers must be 2..32");
-    Require(c.libcamera.pixel_format == "GREY" || c.libcamera.pixel_format == "YUYV" ||
-                c.libcamera.pixel_format == "MJPG" || c.libcamera.pixel_format == "BGR3" ||
-                c.libcamera.pixel_format == "RGB3",
-            "libcamera.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3");
-  }
-  if (c.source == "sim") {
-    Require(!c.sim.scenario.empty(), "sim.scenario must name a scenario file");
-    Require(c.sim.duration_s >= 0 && c.sim.margin_px >= 0 && c.sim.carry_s >= 0 && c.sim.noise_grey >= 0,
-            "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0");
-    Require(c.sim.reflection_prob >= 0 && c.sim.reflection_prob <= 1 && c.sim.occlusion_prob >= 0 &&
-                c.sim.occlusion_prob <= 1,
-            "sim.reflection_prob and occlusion_prob must be in [0, 1]");
-  }
-  if (c.source == "sim" && c.sim.controls_via_lcm && c.sim.speed != 1.0) {
-    Require(c.robot.control_stamp == "sender",
-            "sim.controls_via_lcm at sim.speed != 1: receive stamps are wall-clock times, the simulation's are "
-            "not; set robot.control_stamp: sender");
-  }
-  if (c.source == "replay") {
-    Require(!c.replay.path.empty(), "replay.path (or --replay FILE) must name an LCM log");
-    Require(c.replay.speed >= 0, "replay.speed must be >= 0 (0: --fast)");
-    Require(c.replay.loops >= 1, "replay.loops must be >= 1");
-  }
-  Require(c.camera.nadir_height_m > 0, "camera.nadir_height_m must be > 0");
-  Require(c.target.height_m >= 0 && (c.target.height_m < c.camera.nadir_height_m || !c.camera.floor.empty()),
-          "target.height_m must be >= 0 and below the camera");
-  std::string error;
-  Require(c.detector.IsValid(&error), "detector: " + error);
-  Require(c.pose.method == "ground_plane" || c.pose.method == "lowe", "pose.method must be ground_plane or lowe");
-  Require(c.pose.sigma_px > 0 && c.pose.max_rms_px > 0, "pose.sigma_px and max_rms_px must be > 0");
-  Require(c.robot.control_stamp == "receive" || c.robot.control_stamp == "sender",
-          "robot.control_stamp must be receive or sender");
-  Require(c.robot.max_control_delay_s >= 0, "robot.max_control_delay_s must be >= 0");
-  Require(c.robot.guess_sigma_fraction > 0, "robot.guess_sigma_fraction must be > 0");
-  try {
-    const System sys = MakeSystem(c.robot.model, c.robot.effects);
-    for (const auto& [name, v] : c.robot.guess) {
-      Require(sys.ParamIndex(name) >= 0, "robot.guess: model '" + c.robot.model + "' with its effects has no parameter '" + name + "'");
-      (void)v;
+std::string_view SourceName(SourceKind k) { return NameOf(kSourceNames, k); }
+std::string_view PoseMethodName(PoseMethod m) { return NameOf(kPoseMethodNames, m); }
+std::string_view ControlStampName(ControlStamp s) { return NameOf(kControlStampNames, s); }
+std::string_view FrameEncodingName(FrameEncoding e) { return NameOf(kFrameEncodingNames, e); }
+
+namespace {
+
+// Sets *error to `what` and returns false when !ok (for chains of checks).
+bool Expect(bool ok, const std::string& what, std::string* error) {
+  if (!ok) *error = what;
+  return ok;
+}
+
+}  // namespace
+
+bool LcmOptions::IsValid(std::string* error) const {
+  for (const auto* ch : {&controls_channel, &pose_channel, &params_channel, &health_channel,
+                         &model_check_channel, &markers_channel, &frame_channel}) {
+    if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
+                error)) {
+      return false;
     }
-    Require(c.filter.control_psd.empty() || static_cast<int>(c.filter.control_psd.size()) == sys.num_controls(),
-            "filter.control_psd needs " + std::to_string(sys.num_controls()) + " values for model " + c.robot.model);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("config: robot: ") + e.what());
+  }
+  return true;
+}
+
+bool V4l2Options::IsValid(std::string* error) const {
+  return Expect(width > 0 && height > 0, "v4l2.width/height must be > 0", error) &&
+         Expect(fps > 0, "v4l2.fps must be > 0", error) &&
+         Expect(buffers >= 4 && buffers <= 32, "v4l2.buffers must be 4..32", error) &&
+         Expect(pixel_format == PixelFormat::kGrey || pixel_format == PixelFormat::kYuyv ||
+                    pixel_format == PixelFormat::kMjpeg,
+                "v4l2.pixel_format must be GREY, YUYV or MJPG (got '" +
+                    std::string(PixelFormatName(pixel_format)) + "')",
+                error);
+}
+
+bool LibcameraOptions::IsValid(std::string* error) const {
+  return Expect(width > 0 && height > 0, "libcamera.width/height must be > 0", error) &&
+         Expect(buffers >= 2 && buffers <= 32, "libcamera.buffers must be 2..32", error) &&
+         Expect(pixel_format != PixelFormat::kPng,
+                "libcamera.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3", error);
+}
+
+bool SimOptions::IsValid(std::string* error) const {
+  return Expect(!scenario.empty(), "sim.scenario must name a scenario file", error) &&
+         Expect(duration_s >= 0 && margin_px >= 0 && carry_s >= 0 && noise_grey >= 0,
+                "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0", error) &&
+         Expect(reflection_prob >= 0 && reflection_prob <= 1 && occlusion_prob >= 0 &&
+                    occlusion_prob <= 1,
+                "sim.reflection_prob and occlusion_prob must be in [0, 1]", error);
+}
+
+bool ReplayOptions::IsValid(std::string* error) const {
+  return Expect(!path.empty(), "replay.path (or --replay FILE) must name an LCM log", error) &&
+         Expect(speed >= 0, "replay.speed must be >= 0 (0: --fast)", error) &&
+         Expect(loops >= 1, "replay.loops must be >= 1", error);
+}
+
+bool CameraOptions::IsValid(std::string* error) const {
+  return Expect(nadir_height_m > 0, "camera.nadir_height_m must be > 0", error);
+}
+
+bool TargetOptions::IsValid(std::string* error) const {
+  return Expect(height_m >= 0, "target.height_m must be >= 0 and below the camera", error);
+}
+
+bool PoseOptions::IsValid(std::string* error) const {
+  return Expect(sigma_px > 0 && max_rms_px > 0, "pose.sigma_px and max_rms_px must be > 0", error);
+}
+
+bool RobotOptions::IsValid(std::string* error) const {
+  if (!Expect(max_control_delay_s >= 0, "robot.max_control_delay_s must be >= 0", error) ||
+      !Expect(guess_sigma_fraction > 0, "robot.guess_sigma_fraction must be > 0", error)) {
+    return false;
   }
   try {
-    (void)MakeFilter(c.filter.type);
+    const System sys = MakeSystem(model, effects);
+    for (const auto& [name, v] : guess) {
+      if (!Expect(
+              sys.ParamIndex(name) >= 0,
+              "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
+              error)) {
+        return false;
+      }
+    }
   } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("config: filter.type: ") + e.what());
+    *error = std::string("robot: ") + e.what();
+    return false;
   }
-  for (double v : c.filter.control_psd) Require(v >= 0, "filter.control_psd must be >= 0");
-  for (double v : c.filter.pose_psd) Require(v >= 0, "filter.pose_psd must be >= 0");
-  Require(c.filter.max_pose_gap_s > 0 && c.filter.params_rate_hz >= 0 && c.filter.control_history_s > 0,
-          "filter.max_pose_gap_s, control_history_s must be > 0, params_rate_hz >= 0");
-  Require(c.filter.gate_nis >= 0 && c.filter.divergence_gated >= 1, "filter.gate_nis >= 0, divergence_gated >= 1");
-  Require(c.filter.batch_window_s > 0 && c.filter.batch_window_s <= c.filter.control_history_s,
-          "filter.batch_window_s must be in (0, control_history_s]");
-  Require(c.queues.frames >= 2 && c.queues.poses >= 2 && c.queues.controls >= 2 && c.queues.recorder >= 16,
-          "queues: frames, poses, controls >= 2, recorder >= 16");
-  Require(c.record.frame_encoding == "raw" || c.record.frame_encoding == "png", "record.frame_encoding must be raw or png");
-  Require(c.record.flush_every_s > 0, "record.flush_every_s must be > 0");
-  Require(c.checkpoint.every_s > 0, "checkpoint.every_s must be > 0");
+  return true;
+}
+
+bool FilterOptions::IsValid(std::string* error) const {
+  if (!FilterRegistry::Instance().Has(type)) {
+    *error = "filter.type: unknown filter '" + type +
+             "' (known: " + FilterRegistry::Instance().KnownList() + ")";
+    return false;
+  }
+  for (double v : control_psd) {
+    if (!Expect(v >= 0, "filter.control_psd must be >= 0", error)) return false;
+  }
+  for (double v : pose_psd) {
+    if (!Expect(v >= 0, "filter.pose_psd must be >= 0", error)) return false;
+  }
+  return Expect(max_pose_gap_s > 0 && params_rate_hz >= 0 && control_history_s > 0,
+                "filter.max_pose_gap_s, control_history_s must be > 0, params_rate_hz >= 0",
+                error) &&
+         Expect(gate_nis >= 0 && divergence_gated >= 1,
+                "filter.gate_nis >= 0, divergence_gated >= 1", error) &&
+         Expect(batch_window_s > 0 && batch_window_s <= control_history_s,
+                "filter.batch_window_s must be in (0, control_history_s]", error);
+}
+
+bool QueueOptions::IsValid(std::string* error) const {
+  return Expect(frames >= 2 && poses >= 2 && controls >= 2 && recorder >= 16,
+                "queues: frames, poses, controls >= 2, recorder >= 16", error);
+}
+
+bool RecordOptions::IsValid(std::string* error) const {
+  return Expect(flush_every_s > 0, "record.flush_every_s must be > 0", error);
+}
+
+bool CheckpointOptions::IsValid(std::string* error) const {
+  return Expect(every_s > 0, "checkpoint.every_s must be > 0", error);
+}
+
+bool DaemonConfig::IsValid(std::string* error) const {
+  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) || !lcm.IsValid(error)) {
+    return false;
+  }
+  switch (source) {
+    case SourceKind::kV4l2:
+      if (!v4l2.IsValid(error)) return false;
+      break;
+    case SourceKind::kLibcamera:
+      if (!libcamera.IsValid(error)) return false;
+      break;
+    case SourceKind::kSim:
+      if (!sim.IsValid(error)) return false;
+      break;
+    case SourceKind::kReplay:
+      if (!replay.IsValid(error)) return false;
+      break;
+  }
+  if (source == SourceKind::kSim && sim.controls_via_lcm && sim.speed != 1.0 &&
+      robot.control_stamp != ControlStamp::kSender) {
+    *error =
+        "sim.controls_via_lcm at sim.speed != 1: receive stamps are wall-clock times, the "
+        "simulation's are not; set robot.control_stamp: sender";
+    return false;
+  }
+  if (!camera.IsValid(error) || !target.IsValid(error)) return false;
+  if (!Expect(target.height_m < camera.nadir_height_m || !camera.floor.empty(),
+              "target.height_m must be >= 0 and below the camera", error)) {
+    return false;
+  }
+  std::string detector_error;
+  if (!detector.IsValid(&detector_error)) {
+    *error = "detector: " + detector_error;
+    return false;
+  }
+  if (!pose.IsValid(error) || !robot.IsValid(error) || !filter.IsValid(error)) return false;
+  if (!filter.control_psd.empty()) {
+    const int controls = MakeSystem(robot.model, robot.effects).num_controls();
+    if (!Expect(static_cast<int>(filter.control_psd.size()) == controls,
+                "filter.control_psd needs " + std::to_string(controls) + " values for model " +
+                    robot.model,
+                error)) {
+      return false;
+    }
+  }
+  return queues.IsValid(error) && record.IsValid(error) && checkpoint.IsValid(error);
+}
+
+void Validate(const DaemonConfig& c) {
+  std::string error;
+  if (!c.IsValid(&error)) throw std::runtime_error("config: " + error);
 }
 
 }  // namespace kincal::daemon

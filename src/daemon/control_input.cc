@@ -1,11 +1,10 @@
 // Decoding and checking of incoming control messages.
-#include "kincal/daemon/control_input.h"
-
-#include <kincal/controls_t.hpp>
+#include "daemon/control_input.h"
 
 #include <cmath>
+#include <kincal/controls_t.hpp>
 
-#include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_guard.h"
 
 namespace kincal::daemon {
 

@@ -9,12 +9,18 @@ namespace kincal::daemon {
 
 std::string_view PixelFormatName(PixelFormat f) {
   switch (f) {
-    case PixelFormat::kGrey: return "GREY";
-    case PixelFormat::kYuyv: return "YUYV";
-    case PixelFormat::kMjpeg: return "MJPG";
-    case PixelFormat::kPng: return "PNG";
-    case PixelFormat::kBgr24: return "BGR3";
-    case PixelFormat::kRgb24: return "RGB3";
+    case PixelFormat::kGrey:
+      return "GREY";
+    case PixelFormat::kYuyv:
+      return "YUYV";
+    case PixelFormat::kMjpeg:
+      return "MJPG";
+    case PixelFormat::kPng:
+      return "PNG";
+    case PixelFormat::kBgr24:
+      return "BGR3";
+    case PixelFormat::kRgb24:
+      return "RGB3";
   }
   return "?";
 }
@@ -26,7 +32,8 @@ PixelFormat ParsePixelFormat(std::string_view name) {
   if (name == "PNG") return PixelFormat::kPng;
   if (name == "BGR3") return PixelFormat::kBgr24;
   if (name == "RGB3") return PixelFormat::kRgb24;
-  throw std::invalid_argument("pixel format '" + std::string(name) + "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
+  throw std::invalid_argument("pixel format '" + std::string(name) +
+                              "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
 }
 
 namespace {
@@ -93,12 +100,14 @@ bool EncodedHeaderMatches(const Frame& f, std::string* why) {
 
 void ToGrey(const Frame& f, cv::Mat* grey) {
   const auto size_error = [&](size_t need) {
-    return FrameError(std::string(PixelFormatName(f.format)) + " frame " + std::to_string(f.width) + "x" +
-                      std::to_string(f.height) + " stride " + std::to_string(f.stride) + ": needs " +
-                      std::to_string(need) + " bytes, has " + std::to_string(f.data.size()));
+    return FrameError(std::string(PixelFormatName(f.format)) + " frame " + std::to_string(f.width) +
+                      "x" + std::to_string(f.height) + " stride " + std::to_string(f.stride) +
+                      ": needs " + std::to_string(need) + " bytes, has " +
+                      std::to_string(f.data.size()));
   };
   if (f.width <= 0 || f.height <= 0 || f.width > 16384 || f.height > 16384) {
-    throw FrameError("frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) + " is out of range");
+    throw FrameError("frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                     " is out of range");
   }
   switch (f.format) {
     case PixelFormat::kGrey: {
@@ -107,13 +116,16 @@ void ToGrey(const Frame& f, cv::Mat* grey) {
       if (f.data.size() < need) throw size_error(need);
       grey->create(f.height, f.width, CV_8UC1);
       for (int r = 0; r < f.height; ++r) {
-        std::memcpy(grey->ptr(r), f.data.data() + static_cast<size_t>(r) * f.stride, static_cast<size_t>(f.width));
+        std::memcpy(grey->ptr(r), f.data.data() + static_cast<size_t>(r) * f.stride,
+                    static_cast<size_t>(f.width));
       }
       return;
     }
     case PixelFormat::kYuyv: {
-      if (f.width % 2 != 0 || f.stride < 2 * f.width) throw FrameError("YUYV frame: odd width or stride < 2*width");
-      const size_t need = static_cast<size_t>(f.stride) * (f.height - 1) + 2 * static_cast<size_t>(f.width);
+      if (f.width % 2 != 0 || f.stride < 2 * f.width)
+        throw FrameError("YUYV frame: odd width or stride < 2*width");
+      const size_t need =
+          static_cast<size_t>(f.stride) * (f.height - 1) + 2 * static_cast<size_t>(f.width);
       if (f.data.size() < need) throw size_error(need);
       grey->create(f.height, f.width, CV_8UC1);
       for (int r = 0; r < f.height; ++r) {
@@ -126,33 +138,41 @@ void ToGrey(const Frame& f, cv::Mat* grey) {
     case PixelFormat::kBgr24:
     case PixelFormat::kRgb24: {
       if (f.stride < 3 * f.width) throw FrameError("24-bit frame: stride < 3*width");
-      const size_t need = static_cast<size_t>(f.stride) * (f.height - 1) + 3 * static_cast<size_t>(f.width);
+      const size_t need =
+          static_cast<size_t>(f.stride) * (f.height - 1) + 3 * static_cast<size_t>(f.width);
       if (f.data.size() < need) throw size_error(need);
-      const cv::Mat colour(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.data.data()), static_cast<size_t>(f.stride));
-      cv::cvtColor(colour, *grey, f.format == PixelFormat::kBgr24 ? cv::COLOR_BGR2GRAY : cv::COLOR_RGB2GRAY);
+      const cv::Mat colour(f.height, f.width, CV_8UC3, const_cast<uint8_t*>(f.data.data()),
+                           static_cast<size_t>(f.stride));
+      cv::cvtColor(colour, *grey,
+                   f.format == PixelFormat::kBgr24 ? cv::COLOR_BGR2GRAY : cv::COLOR_RGB2GRAY);
       return;
     }
     case PixelFormat::kMjpeg:
     case PixelFormat::kPng: {
-      if (f.data.empty()) throw FrameError(std::string(PixelFormatName(f.format)) + " frame is empty");
+      if (f.data.empty())
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame is empty");
       // cv::imdecode picks a decoder by content (DICOM, TIFF, JPEG 2000, HDR...; one of
       // them aborts the process on malformed input): only the declared format goes
       // through, with its header's image size checked before anything is decompressed.
       std::string why;
-      if (!EncodedHeaderMatches(f, &why)) throw FrameError(std::string(PixelFormatName(f.format)) + " frame: " + why);
-      const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1, const_cast<uint8_t*>(f.data.data()));
+      if (!EncodedHeaderMatches(f, &why))
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame: " + why);
+      const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1,
+                        const_cast<uint8_t*>(f.data.data()));
       cv::Mat decoded;
       try {
         decoded = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
       } catch (const cv::Exception& e) {
-        throw FrameError(std::string(PixelFormatName(f.format)) + " frame: decoder error: " + e.what());
+        throw FrameError(std::string(PixelFormatName(f.format)) +
+                         " frame: decoder error: " + e.what());
       }
-      if (decoded.empty()) throw FrameError(std::string(PixelFormatName(f.format)) + " frame: corrupt data (" +
-                                            std::to_string(f.data.size()) + " bytes)");
+      if (decoded.empty())
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame: corrupt data (" +
+                         std::to_string(f.data.size()) + " bytes)");
       if (decoded.cols != f.width || decoded.rows != f.height) {
-        throw FrameError(std::string(PixelFormatName(f.format)) + " frame decodes to " + std::to_string(decoded.cols) +
-                         "x" + std::to_string(decoded.rows) + ", expected " + std::to_string(f.width) + "x" +
-                         std::to_string(f.height));
+        throw FrameError(std::string(PixelFormatName(f.format)) + " frame decodes to " +
+                         std::to_string(decoded.cols) + "x" + std::to_string(decoded.rows) +
+                         ", expected " + std::to_string(f.width) + "x" + std::to_string(f.height));
       }
       decoded.copyTo(*grey);
       return;
@@ -167,7 +187,8 @@ void FromGrey(const cv::Mat& grey, Frame* f) {
   f->stride = grey.cols;
   f->format = PixelFormat::kGrey;
   f->data.resize(static_cast<size_t>(grey.cols) * grey.rows);
-  for (int r = 0; r < grey.rows; ++r) std::memcpy(f->data.data() + static_cast<size_t>(r) * grey.cols, grey.ptr(r), grey.cols);
+  for (int r = 0; r < grey.rows; ++r)
+    std::memcpy(f->data.data() + static_cast<size_t>(r) * grey.cols, grey.ptr(r), grey.cols);
 }
 
 }  // namespace kincal::daemon

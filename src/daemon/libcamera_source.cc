@@ -8,7 +8,8 @@
 #include <deque>
 #include <mutex>
 
-#include "kincal/daemon/sources.h"
+#include "daemon/device_common.h"
+#include "daemon/sources.h"
 
 namespace kincal::daemon {
 namespace {
@@ -19,7 +20,10 @@ class LibcameraSource final : public FrameSource {
  public:
   explicit LibcameraSource(LibcameraOptions o) : opt_(std::move(o)) {}
   ~LibcameraSource() override { Close(); }
-  std::string name() const override { return "libcamera(" + (id_.empty() ? opt_.camera : id_) + ")"; }
+  std::string name() const override {
+    return "libcamera(" + (id_.empty() ? opt_.camera : id_) + ")";
+  }
+  SourceCapabilities capabilities() const override { return {.can_reopen = true}; }
 
   void Start() override {
     cm_ = std::make_unique<lc::CameraManager>();
@@ -36,9 +40,10 @@ class LibcameraSource final : public FrameSource {
     if (camera_->acquire() != 0) throw SourceError("libcamera: camera " + id_ + " is in use");
     acquired_ = true;
     config_ = camera_->generateConfiguration({lc::StreamRole::Viewfinder});
-    if (!config_ || config_->empty()) throw SourceError("libcamera: " + id_ + ": no stream configuration");
+    if (!config_ || config_->empty())
+      throw SourceError("libcamera: " + id_ + ": no stream configuration");
     lc::StreamConfiguration& sc = config_->at(0);
-    const PixelFormat want = ParsePixelFormat(opt_.pixel_format);
+    const PixelFormat want = opt_.pixel_format;
     const lc::PixelFormat pf = want == PixelFormat::kGrey    ? lc::formats::R8
                                : want == PixelFormat::kYuyv  ? lc::formats::YUYV
                                : want == PixelFormat::kMjpeg ? lc::formats::MJPEG
@@ -52,17 +57,20 @@ class LibcameraSource final : public FrameSource {
     }
     if (sc.pixelFormat != pf || sc.size.width != static_cast<unsigned>(opt_.width) ||
         sc.size.height != static_cast<unsigned>(opt_.height)) {
-      throw SourceError("libcamera: " + id_ + ": asked for " + opt_.pixel_format + " " + std::to_string(opt_.width) +
-                        "x" + std::to_string(opt_.height) + ", the camera offers " + sc.toString());
+      throw SourceError("libcamera: " + id_ + ": asked for " + std::string(PixelFormatName(want)) +
+                        " " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
+                        ", the camera offers " + sc.toString());
     }
-    if (camera_->configure(config_.get()) != 0) throw SourceError("libcamera: " + id_ + ": configure failed");
+    if (camera_->configure(config_.get()) != 0)
+      throw SourceError("libcamera: " + id_ + ": configure failed");
     format_ = want;
     width_ = static_cast<int>(sc.size.width);
     height_ = static_cast<int>(sc.size.height);
     stride_ = static_cast<int>(sc.stride);
     stream_ = sc.stream();
     allocator_ = std::make_unique<lc::FrameBufferAllocator>(camera_);
-    if (allocator_->allocate(stream_) < 0) throw SourceError("libcamera: " + id_ + ": buffer allocation failed");
+    if (allocator_->allocate(stream_) < 0)
+      throw SourceError("libcamera: " + id_ + ": buffer allocation failed");
     for (const auto& buffer : allocator_->buffers(stream_)) {
       const auto& plane = buffer->planes()[0];
       size_t length = 0;
@@ -86,7 +94,8 @@ class LibcameraSource final : public FrameSource {
     lc::Request* r = nullptr;
     {
       std::unique_lock lock(mu_);
-      if (!cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms), [&] { return !done_.empty() || stop_; })) {
+      if (!cv_.wait_for(lock, std::chrono::milliseconds(timeout_ms),
+                        [&] { return !done_.empty() || stop_; })) {
         return SourceStatus::kTimeout;
       }
       if (stop_) return SourceStatus::kEnd;
@@ -102,9 +111,7 @@ class LibcameraSource final : public FrameSource {
     const lc::FrameMetadata& md = buffer->metadata();
     const auto sensor_ts = r->metadata().get(lc::controls::SensorTimestamp);
     const TimeNs stamp = sensor_ts ? *sensor_ts : static_cast<TimeNs>(md.timestamp);
-    if (have_seq_ && md.sequence > last_seq_ + 1) drops_ += md.sequence - last_seq_ - 1;
-    last_seq_ = md.sequence;
-    have_seq_ = true;
+    gaps_.Observe(md.sequence);
     const auto& map = maps_.at(buffer);
     const auto& plane = buffer->planes()[0];
     const size_t used = std::min<size_t>(md.planes()[0].bytesused, map.length - plane.offset);
@@ -128,21 +135,16 @@ class LibcameraSource final : public FrameSource {
     stop_ = true;
     cv_.notify_all();
   }
-  int64_t device_drops() const override { return drops_; }
+  int64_t device_drops() const override { return gaps_.drops(); }
   bool Reopen(std::string* error) override {
-    Close();
-    {
+    auto close = [this] {
+      Close();
       std::lock_guard lock(mu_);
       done_.clear();
-    }
-    have_seq_ = false;
-    try {
-      Start();
-      return true;
-    } catch (const SourceError& e) {
-      *error = e.what();
-      return false;
-    }
+      gaps_.Restart();
+    };
+    return ReopenDevice(
+        close, [this] { Start(); }, error);
   }
 
  private:
@@ -187,9 +189,7 @@ class LibcameraSource final : public FrameSource {
   std::string id_;
   PixelFormat format_ = PixelFormat::kGrey;
   int width_ = 0, height_ = 0, stride_ = 0;
-  unsigned last_seq_ = 0;
-  bool have_seq_ = false;
-  int64_t drops_ = 0;
+  SequenceGaps gaps_;
 };
 
 }  // namespace

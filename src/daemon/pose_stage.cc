@@ -1,5 +1,5 @@
 // Detection and pose of one frame.
-#include "kincal/daemon/pose_stage.h"
+#include "daemon/pose_stage.h"
 
 #include "kincal/angles.h"
 #include "kincal/vision/pose.h"
@@ -13,7 +13,8 @@ Eigen::Vector3d FloorPoseOf(const vision::FloorExtrinsics& floor, const vision::
   return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
 }
 
-vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Vector3d& xyt, double height) {
+vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Vector3d& xyt,
+                           double height) {
   vision::Pose3 p;
   p.R = floor.R_cf * Eigen::AngleAxisd(xyt.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
   p.t = floor.R_cf * Eigen::Vector3d(xyt.x(), xyt.y(), height) + floor.t_cf;
@@ -51,12 +52,14 @@ bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
     p->v[static_cast<size_t>(i)] = m.centre_px.y();
     p->id[static_cast<size_t>(i)] = m.id;
   }
-  if (markers.size() == vis_.layout.markers.size() && markers.size() <= static_cast<size_t>(kMaxMarkers)) {
+  if (markers.size() == vis_.layout.markers.size() &&
+      markers.size() <= static_cast<size_t>(kMaxMarkers)) {
     Solve(markers, p);
     // The centre of a marker's image is not the image of its centre: correct by the
     // current pose and solve once more.
     if (p->valid) {
-      vision::CorrectPerspectiveBias(vis_.camera, CameraPoseOf(vis_.floor, p->xytheta, cfg_.target.height_m),
+      vision::CorrectPerspectiveBias(vis_.camera,
+                                     CameraPoseOf(vis_.floor, p->xytheta, cfg_.target.height_m),
                                      vis_.layout, &markers);
       Solve(markers, p);
     }
@@ -79,12 +82,13 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
   const std::span<const Eigen::Vector2d> n(norm_.data(), static_cast<size_t>(nm));
   Eigen::Vector3d init = last_pose_;
   vision::Pose3 pose3;
-  if (!have_last_ || cfg_.pose.method == "lowe") {
+  if (!have_last_ || cfg_.pose.method == PoseMethod::kLowe) {
     if (!vision::PlanarInitialPose(o, n, &pose3)) return;
     init = FloorPoseOf(vis_.floor, pose3);
   }
-  if (cfg_.pose.method == "ground_plane") {
-    const auto r = vision::GroundPlanePose(vis_.floor, cfg_.target.height_m, o, n, init, vis_.camera.fx, cfg_.pose.sigma_px);
+  if (cfg_.pose.method == PoseMethod::kGroundPlane) {
+    const auto r = vision::GroundPlanePose(vis_.floor, cfg_.target.height_m, o, n, init,
+                                           vis_.camera.fx, cfg_.pose.sigma_px);
     if (!r.ok || !(r.rms_px <= cfg_.pose.max_rms_px) || !r.xytheta.allFinite()) return;
     p->xytheta = r.xytheta;
     p->covariance = r.covariance;

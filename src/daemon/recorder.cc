@@ -1,5 +1,5 @@
 // LCM event-log writer thread.
-#include "kincal/daemon/recorder.h"
+#include "daemon/recorder.h"
 
 #include <lcm/eventlog.h>
 
@@ -10,10 +10,12 @@
 
 namespace kincal::daemon {
 
-Recorder::Recorder(const std::string& path, size_t capacity, FullPolicy policy, double flush_every_s)
+Recorder::Recorder(const std::string& path, size_t capacity, FullPolicy policy,
+                   double flush_every_s)
     : path_(path), queue_(capacity, policy), flush_every_s_(flush_every_s) {
   lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "w");
-  if (log == nullptr) throw std::runtime_error(path + ": cannot create LCM log: " + std::strerror(errno));
+  if (log == nullptr)
+    throw std::runtime_error(path + ": cannot create LCM log: " + std::strerror(errno));
   log_ = log;
   thread_ = std::thread([this] { Loop(); });
 }

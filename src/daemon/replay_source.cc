@@ -1,16 +1,16 @@
 // Replay of a kincald LCM log: frames go through the pipeline again, controls to the
 // filter with their recorded receive times.
-#include <kincal/frame_t.hpp>
 #include <spdlog/spdlog.h>
 #include <sys/stat.h>
 
 #include <atomic>
 #include <cstring>
+#include <kincal/frame_t.hpp>
 #include <optional>
 #include <thread>
 
-#include "kincal/daemon/lcm_guard.h"
-#include "kincal/daemon/sources.h"
+#include "daemon/sources.h"
+#include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 
 namespace kincal::daemon {
@@ -18,7 +18,8 @@ namespace {
 
 class ReplaySource final : public FrameSource {
  public:
-  ReplaySource(const DaemonConfig& c, ControlIntake controls) : cfg_(c), intake_(std::move(controls)) {
+  ReplaySource(const DaemonConfig& c, ControlIntake controls)
+      : cfg_(c), intake_(std::move(controls)) {
     struct stat st {};
     if (::stat(c.replay.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
       throw SourceError(c.replay.path + ": cannot open log for replay (no such file)");
@@ -33,7 +34,12 @@ class ReplaySource final : public FrameSource {
   std::string name() const override { return "replay(" + cfg_.replay.path + ")"; }
   void Start() override { start_mono_ = MonotonicNs(); }
   void Stop() override { stopped_ = true; }
-  bool lossless() const override { return cfg_.replay.speed <= 0; }
+  SourceCapabilities capabilities() const override {
+    return {.lossless = cfg_.replay.speed <= 0,
+            .carries_controls = true,
+            .controls_end_with_frames = true,
+            .can_reopen = false};
+  }
 
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* error) override {
     while (!stopped_) {
@@ -64,9 +70,10 @@ class ReplaySource final : public FrameSource {
       }
       std::string why;
       if (!PlausibleFrame(ev->data.data(), ev->data.size(), &why) ||
-          msg_.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 || msg_.size != static_cast<int32_t>(msg_.data.size())) {
-        *error = cfg_.replay.path + ": event " + std::to_string(ev->eventnum) + " on " + std::string(channel) +
-                 ": not a kincal.frame_t";
+          msg_.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 ||
+          msg_.size != static_cast<int32_t>(msg_.data.size())) {
+        *error = cfg_.replay.path + ": event " + std::to_string(ev->eventnum) + " on " +
+                 std::string(channel) + ": not a kincal.frame_t";
         ++bad_frames_;
         continue;  // reported through the frame error count, replay goes on
       }
@@ -98,14 +105,17 @@ class ReplaySource final : public FrameSource {
   // pass, never silently; the count is in rejected() and so in health.
   void ReportDamage() {
     if (log_->problems().size() == reported_) return;
-    for (size_t i = reported_; i < log_->problems().size(); ++i) spdlog::warn("replay: {}", log_->problems()[i]);
+    for (size_t i = reported_; i < log_->problems().size(); ++i)
+      spdlog::warn("replay: {}", log_->problems()[i]);
     reported_ = log_->problems().size();
   }
 
   void Pace(int64_t utime) {
-    const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(utime - first_utime_) * 1000.0 / cfg_.replay.speed);
+    const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(utime - first_utime_) *
+                                                         1000.0 / cfg_.replay.speed);
     while (!stopped_ && MonotonicNs() < due) {
-      std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
+      std::this_thread::sleep_for(
+          std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
     }
   }
 

@@ -1,25 +1,24 @@
 // The simulated camera: a scenario's robot rendered through the synthetic camera.
-#include <kincal/controls_t.hpp>
-
 #include <chrono>
+#include <kincal/controls_t.hpp>
 #include <numbers>
+#include <opencv2/imgproc.hpp>
 #include <random>
 #include <thread>
 
+#include "daemon/sources.h"
 #include "kincal/angles.h"
-#include "kincal/daemon/sources.h"
 #include "kincal/scenario.h"
 #include "kincal/simulator.h"
 #include "kincal/vision/target.h"
-
-#include <opencv2/imgproc.hpp>
 
 namespace kincal::daemon {
 namespace {
 
 class SimSource final : public FrameSource {
  public:
-  SimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls, NetworkPublish publish)
+  SimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls,
+            NetworkPublish publish)
       : cfg_(c),
         vis_(v),
         sc_(LoadScenario(c.sim.scenario)),
@@ -29,22 +28,26 @@ class SimSource final : public FrameSource {
         rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
         fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
     if (sc_.model != c.robot.model) {
-      throw SourceError(c.sim.scenario + ": scenario model '" + sc_.model + "' differs from robot.model '" +
-                        c.robot.model + "' in " + (c.file.empty() ? "the config" : c.file));
+      throw SourceError(c.sim.scenario + ": scenario model '" + sc_.model +
+                        "' differs from robot.model '" + c.robot.model + "' in " +
+                        (c.file.empty() ? "the config" : c.file));
     }
     const int nc = truth_.num_controls();
-    if (static_cast<int>(sc_.control_low.size()) != nc || static_cast<int>(sc_.control_high.size()) != nc) {
-      throw SourceError(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) + " values");
+    if (static_cast<int>(sc_.control_low.size()) != nc ||
+        static_cast<int>(sc_.control_high.size()) != nc) {
+      throw SourceError(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
+                        " values");
     }
     p_true_ = ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth");
     const double duration = c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s;
     const TimeNs t1 = SecondsToNs(duration);
     cmd_ = ControlSignal(nc, 0);
     if (sc_.profile == "smooth") {
-      AppendSmoothRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s, sc_.control_rate_hz, rng_);
+      AppendSmoothRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s,
+                         sc_.control_rate_hz, rng_);
     } else if (sc_.profile == "piecewise") {
-      AppendPiecewiseRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s, 3.0 * sc_.min_period_s,
-                            rng_);
+      AppendPiecewiseRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s,
+                            3.0 * sc_.min_period_s, rng_);
     } else {
       throw SourceError(c.sim.scenario + ": controls.profile must be smooth or piecewise");
     }
@@ -66,17 +69,24 @@ class SimSource final : public FrameSource {
     start_mono_ = MonotonicNs();
   }
   void Stop() override { stopped_ = true; }
-  bool lossless() const override { return cfg_.sim.speed <= 0; }
+  SourceCapabilities capabilities() const override {
+    return {.lossless = cfg_.sim.speed <= 0,
+            .carries_controls = !cfg_.sim.controls_via_lcm,
+            .controls_end_with_frames = true,
+            .can_reopen = false};
+  }
 
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* /*error*/) override {
     if (stopped_ || k_ >= times_.size()) return SourceStatus::kEnd;
     const TimeNs t = times_[k_];
     // The robot's commands up to this frame, as it would publish them.
-    while (ci_ < cmd_.size() && cmd_.ToNs(cmd_.TimeAt(static_cast<int>(ci_))) <= t) EmitControl(ci_++);
+    while (ci_ < cmd_.size() && cmd_.ToNs(cmd_.TimeAt(static_cast<int>(ci_))) <= t)
+      EmitControl(ci_++);
     if (cfg_.sim.speed > 0) {  // pace to simulated time / speed
       const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(t) / cfg_.sim.speed);
       while (!stopped_ && MonotonicNs() < due) {
-        std::this_thread::sleep_for(std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
+        std::this_thread::sleep_for(
+            std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
       }
     }
     const double ts = cmd_.ToSeconds(t);
@@ -93,9 +103,11 @@ class SimSource final : public FrameSource {
     if (!carrying_) {
       Eigen::Vector3d target;
       truth_.Measure(x_.data(), target.data());
-      const Eigen::Matrix3d Rz = Eigen::AngleAxisd(target.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+      const Eigen::Matrix3d Rz =
+          Eigen::AngleAxisd(target.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
       pose.R = vis_.floor.R_cf * Rz;
-      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), cfg_.target.height_m) + vis_.floor.t_cf;
+      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), cfg_.target.height_m) +
+               vis_.floor.t_cf;
       in_view = InView(pose);
       if (!in_view) {
         carrying_ = true;
@@ -121,11 +133,14 @@ class SimSource final : public FrameSource {
   }
 
  private:
-  double Heading() { return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_); }
+  double Heading() {
+    return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_);
+  }
 
   // Measurement faults: a reflection that looks like a marker somewhere near the target,
   // or a marker hidden behind something (the wrong number of markers).
-  void AddFaults(const vision::Pose3& pose, const std::vector<Eigen::Vector2d>& centres, cv::Mat* image) {
+  void AddFaults(const vision::Pose3& pose, const std::vector<Eigen::Vector2d>& centres,
+                 cv::Mat* image) {
     std::uniform_real_distribution<double> u01(0.0, 1.0);
     const double r_px = vis_.camera.fx * vis_.layout.marker_radius_m / pose.t.z();
     if (cfg_.sim.reflection_prob > 0 && u01(fault_rng_) < cfg_.sim.reflection_prob) {
@@ -135,12 +150,15 @@ class SimSource final : public FrameSource {
       const double du = u01(fault_rng_) - 0.5;
       const Eigen::Vector2d c = centres.front() + Eigen::Vector2d(du, dv) * reach;
       cv::circle(*image, cv::Point(static_cast<int>(c.x() * 16), static_cast<int>(c.y() * 16)),
-                 static_cast<int>(r_px * 16), cv::Scalar(render_.foreground), cv::FILLED, cv::LINE_AA, 4);
+                 static_cast<int>(r_px * 16), cv::Scalar(render_.foreground), cv::FILLED,
+                 cv::LINE_AA, 4);
     }
     if (cfg_.sim.occlusion_prob > 0 && u01(fault_rng_) < cfg_.sim.occlusion_prob) {
-      const auto& c = centres[static_cast<size_t>(u01(fault_rng_) * static_cast<double>(centres.size())) % centres.size()];
-      cv::circle(*image, cv::Point(static_cast<int>(c.x()), static_cast<int>(c.y())), static_cast<int>(2 * r_px + 2),
-                 cv::Scalar(render_.background), cv::FILLED);
+      const auto& c =
+          centres[static_cast<size_t>(u01(fault_rng_) * static_cast<double>(centres.size())) %
+                  centres.size()];
+      cv::circle(*image, cv::Point(static_cast<int>(c.x()), static_cast<int>(c.y())),
+                 static_cast<int>(2 * r_px + 2), cv::Scalar(render_.background), cv::FILLED);
     }
   }
 
@@ -150,14 +168,17 @@ class SimSource final : public FrameSource {
       const Eigen::Vector3d pc = pose.R * Eigen::Vector3d(q.x(), q.y(), 0.0) + pose.t;
       if (pc.z() <= 0) return false;
       const Eigen::Vector2d px = vis_.camera.Project(pc);
-      if (px.x() < m || px.y() < m || px.x() > vis_.camera.width - 1 - m || px.y() > vis_.camera.height - 1 - m) return false;
+      if (px.x() < m || px.y() < m || px.x() > vis_.camera.width - 1 - m ||
+          px.y() > vis_.camera.height - 1 - m)
+        return false;
     }
     return true;
   }
 
   void EmitControl(size_t i) {
     const auto& v = cmd_.ValuesAt(static_cast<int>(i));
-    for (int k = 0; k < msg_.num_controls; ++k) msg_.values[static_cast<size_t>(k)] = v[static_cast<size_t>(k)];
+    for (int k = 0; k < msg_.num_controls; ++k)
+      msg_.values[static_cast<size_t>(k)] = v[static_cast<size_t>(k)];
     msg_.utime = start_utime_ + cmd_.ToNs(cmd_.TimeAt(static_cast<int>(i))) / 1000;
     msg_.sender_utime = msg_.utime;
     const int n = msg_.getEncodedSize();
@@ -193,8 +214,8 @@ class SimSource final : public FrameSource {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls,
-                                           NetworkPublish publish) {
+std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v,
+                                           ControlIntake controls, NetworkPublish publish) {
   return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish));
 }
 

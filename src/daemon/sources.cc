@@ -1,9 +1,10 @@
 // Shared pieces of the frame sources: clocks and the vision set-up.
+#include "daemon/sources.h"
+
 #include <time.h>
 
 #include <stdexcept>
 
-#include "kincal/daemon/sources.h"
 #include "kincal/vision/config.h"
 
 namespace kincal::daemon {
@@ -41,6 +42,21 @@ int64_t MonotonicToUtime(TimeNs mono_ns) {
   return (mono_ns + offset_ns) / 1000;
 }
 
+std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
+                                        ControlIntake controls, NetworkPublish publish) {
+  switch (c.source) {
+    case SourceKind::kSim:
+      return MakeSimSource(c, v, std::move(controls), std::move(publish));
+    case SourceKind::kReplay:
+      return MakeReplaySource(c, std::move(controls));
+    case SourceKind::kV4l2:
+      return MakeV4l2Source(c.v4l2);
+    case SourceKind::kLibcamera:
+      return MakeLibcameraSource(c.libcamera);
+  }
+  return nullptr;  // unreachable: every SourceKind is handled above
+}
+
 VisionSetup LoadVisionSetup(const DaemonConfig& c) {
   VisionSetup v;
   if (c.camera.intrinsics.empty()) {
@@ -52,10 +68,12 @@ VisionSetup LoadVisionSetup(const DaemonConfig& c) {
   } else {
     v.camera = vision::ReadCameraYaml(c.camera.intrinsics);
   }
-  v.floor = c.camera.floor.empty() ? vision::NadirFloor(c.camera.nadir_height_m) : vision::ReadFloorYaml(c.camera.floor);
+  v.floor = c.camera.floor.empty() ? vision::NadirFloor(c.camera.nadir_height_m)
+                                   : vision::ReadFloorYaml(c.camera.floor);
   v.layout = vision::ReadTargetLayoutYaml(c.target.layout);
   if (static_cast<int>(v.layout.markers.size()) > kMaxMarkers) {
-    throw std::runtime_error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) + " markers per target");
+    throw std::runtime_error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) +
+                             " markers per target");
   }
   return v;
 }

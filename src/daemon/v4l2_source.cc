@@ -2,6 +2,7 @@
 #include <fcntl.h>
 #include <linux/videodev2.h>
 #include <poll.h>
+#include <spdlog/spdlog.h>
 #include <sys/ioctl.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -9,10 +10,11 @@
 #include <algorithm>
 #include <atomic>
 #include <cerrno>
-#include <map>
 #include <cstring>
+#include <map>
 
-#include "kincal/daemon/sources.h"
+#include "daemon/device_common.h"
+#include "daemon/sources.h"
 
 namespace kincal::daemon {
 namespace {
@@ -26,8 +28,8 @@ int Ioctl(int fd, unsigned long request, void* arg) {
 }
 
 std::string FourCc(uint32_t f) {
-  return {static_cast<char>(f & 0xff), static_cast<char>((f >> 8) & 0xff), static_cast<char>((f >> 16) & 0xff),
-          static_cast<char>((f >> 24) & 0xff)};
+  return {static_cast<char>(f & 0xff), static_cast<char>((f >> 8) & 0xff),
+          static_cast<char>((f >> 16) & 0xff), static_cast<char>((f >> 24) & 0xff)};
 }
 
 // "Exposure Time, Absolute" -> "exposure_time_absolute"
@@ -51,72 +53,18 @@ class V4l2Source final : public FrameSource {
   ~V4l2Source() override { Close(); }
 
   std::string name() const override { return "v4l2(" + opt_.device + ")"; }
+  SourceCapabilities capabilities() const override { return {.can_reopen = true}; }
 
+  // Opens the device and starts streaming; a device already open is closed first (a
+  // second Start() restarts it). Throws SourceError naming the device, the step that
+  // failed and errno's text.
   void Start() override {
-    fd_ = ::open(opt_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-    if (fd_ < 0) throw SourceError(opt_.device + ": cannot open: " + std::strerror(errno));
-    v4l2_capability cap{};
-    if (Ioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) Fail("VIDIOC_QUERYCAP (not a V4L2 device?)");
-    const uint32_t caps = (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
-    if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) throw SourceError(opt_.device + ": not a video capture device");
-    if (!(caps & V4L2_CAP_STREAMING)) throw SourceError(opt_.device + ": does not support streaming I/O");
-    card_ = reinterpret_cast<const char*>(cap.card);
-
-    // Format: the requested size and pixel format; the driver may adjust the size.
-    const PixelFormat want = ParsePixelFormat(opt_.pixel_format);
-    const uint32_t fourcc = want == PixelFormat::kGrey ? V4L2_PIX_FMT_GREY
-                            : want == PixelFormat::kYuyv ? V4L2_PIX_FMT_YUYV
-                                                         : V4L2_PIX_FMT_MJPEG;
-    v4l2_format fmt{};
-    fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    fmt.fmt.pix.width = static_cast<uint32_t>(opt_.width);
-    fmt.fmt.pix.height = static_cast<uint32_t>(opt_.height);
-    fmt.fmt.pix.pixelformat = fourcc;
-    fmt.fmt.pix.field = V4L2_FIELD_NONE;
-    if (Ioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) Fail("VIDIOC_S_FMT " + opt_.pixel_format);
-    if (fmt.fmt.pix.pixelformat != fourcc) {
-      throw SourceError(opt_.device + ": does not offer " + opt_.pixel_format + " (it offers " +
-                        FourCc(fmt.fmt.pix.pixelformat) + "); set v4l2.pixel_format");
-    }
-    format_ = want;
-    width_ = static_cast<int>(fmt.fmt.pix.width);
-    height_ = static_cast<int>(fmt.fmt.pix.height);
-    stride_ = static_cast<int>(fmt.fmt.pix.bytesperline);
-    if (width_ != opt_.width || height_ != opt_.height) {
-      throw SourceError(opt_.device + ": asked for " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
-                        ", the driver offers " + std::to_string(width_) + "x" + std::to_string(height_));
-    }
-    // Frame rate (not every driver supports it: then the driver's own rate stands).
-    v4l2_streamparm parm{};
-    parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    parm.parm.capture.timeperframe.numerator = 1000;
-    parm.parm.capture.timeperframe.denominator = static_cast<uint32_t>(std::lround(opt_.fps * 1000));
-    if (Ioctl(fd_, VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.denominator > 0) {
-      frame_period_ns_ = static_cast<TimeNs>(1e9 * parm.parm.capture.timeperframe.numerator /
-                                             parm.parm.capture.timeperframe.denominator);
-    } else {
-      frame_period_ns_ = static_cast<TimeNs>(1e9 / opt_.fps);
-    }
+    Close();
+    Open();
+    SetFormat();
+    SetFrameRate();
     SetControls();
-
-    v4l2_requestbuffers req{};
-    req.count = static_cast<uint32_t>(opt_.buffers);
-    req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    req.memory = V4L2_MEMORY_MMAP;
-    if (Ioctl(fd_, VIDIOC_REQBUFS, &req) != 0) Fail("VIDIOC_REQBUFS (mmap)");
-    if (req.count < 4) throw SourceError(opt_.device + ": only " + std::to_string(req.count) + " buffers (need >= 4)");
-    buffers_.resize(req.count);
-    for (uint32_t i = 0; i < req.count; ++i) {
-      v4l2_buffer b{};
-      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-      b.memory = V4L2_MEMORY_MMAP;
-      b.index = i;
-      if (Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0) Fail("VIDIOC_QUERYBUF");
-      void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
-      if (p == MAP_FAILED) Fail("mmap");
-      buffers_[i] = {p, b.length};
-      if (Ioctl(fd_, VIDIOC_QBUF, &b) != 0) Fail("VIDIOC_QBUF");
-    }
+    MapBuffers();
     v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     if (Ioctl(fd_, VIDIOC_STREAMON, &type) != 0) Fail("VIDIOC_STREAMON");
     streaming_ = true;
@@ -134,7 +82,8 @@ class V4l2Source final : public FrameSource {
       return SourceStatus::kError;
     }
     if (p.revents & (POLLERR | POLLHUP | POLLNVAL)) {
-      *error = opt_.device + ": device error or disconnected (poll revents " + std::to_string(p.revents) + ")";
+      *error = opt_.device + ": device error or disconnected (poll revents " +
+               std::to_string(p.revents) + ")";
       return SourceStatus::kError;
     }
     v4l2_buffer b{};
@@ -147,15 +96,15 @@ class V4l2Source final : public FrameSource {
     }
     const TimeNs arrival = MonotonicNs();
     // Kernel timestamp: CLOCK_MONOTONIC for every modern driver (flag checked).
-    TimeNs stamp_ns = static_cast<TimeNs>(b.timestamp.tv_sec) * kNsPerSecond + b.timestamp.tv_usec * 1000;
-    const bool monotonic = (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    TimeNs stamp_ns =
+        static_cast<TimeNs>(b.timestamp.tv_sec) * kNsPerSecond + b.timestamp.tv_usec * 1000;
+    const bool monotonic =
+        (b.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     if (!monotonic || stamp_ns == 0) stamp_ns = arrival;  // no usable device stamp: use arrival
     // End-of-frame stamps mark the end of readout: the exposure began about a period earlier.
     const bool eof = (b.flags & V4L2_BUF_FLAG_TSTAMP_SRC_MASK) == V4L2_BUF_FLAG_TSTAMP_SRC_EOF;
     const TimeNs exposure_ns = eof ? stamp_ns - frame_period_ns_ : stamp_ns;
-    if (have_seq_ && b.sequence > last_seq_ + 1) drops_ += b.sequence - last_seq_ - 1;
-    last_seq_ = b.sequence;
-    have_seq_ = true;
+    gaps_.Observe(b.sequence);
     const auto& buf = buffers_[b.index];
     const size_t used = std::min<size_t>(b.bytesused ? b.bytesused : buf.length, buf.length);
     f->data.resize(used);
@@ -178,24 +127,104 @@ class V4l2Source final : public FrameSource {
 
   // Called from another thread: the capture thread closes the device on its next Next().
   void Stop() override { stop_.store(true); }
-  int64_t device_drops() const override { return drops_; }
+  int64_t device_drops() const override { return gaps_.drops(); }
   bool Reopen(std::string* error) override {
-    Close();
-    have_seq_ = false;
-    try {
-      Start();
-      return true;
-    } catch (const SourceError& e) {
-      *error = e.what();
-      return false;
-    }
+    auto close = [this] {
+      Close();
+      gaps_.Restart();
+    };
+    return ReopenDevice(
+        close, [this] { Start(); }, error);
   }
 
  private:
+  void Open() {
+    fd_ = ::open(opt_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
+    if (fd_ < 0) throw SourceError(opt_.device + ": cannot open: " + std::strerror(errno));
+    v4l2_capability cap{};
+    if (Ioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) Fail("VIDIOC_QUERYCAP (not a V4L2 device?)");
+    const uint32_t caps =
+        (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
+    if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) Refuse("not a video capture device");
+    if (!(caps & V4L2_CAP_STREAMING)) Refuse("does not support streaming I/O");
+    card_ = reinterpret_cast<const char*>(cap.card);
+  }
+
+  // The requested size and pixel format; a driver that adjusts either is refused.
+  void SetFormat() {
+    const PixelFormat want = opt_.pixel_format;
+    const std::string want_name(PixelFormatName(want));
+    const uint32_t fourcc = want == PixelFormat::kGrey   ? V4L2_PIX_FMT_GREY
+                            : want == PixelFormat::kYuyv ? V4L2_PIX_FMT_YUYV
+                                                         : V4L2_PIX_FMT_MJPEG;
+    v4l2_format fmt{};
+    fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    fmt.fmt.pix.width = static_cast<uint32_t>(opt_.width);
+    fmt.fmt.pix.height = static_cast<uint32_t>(opt_.height);
+    fmt.fmt.pix.pixelformat = fourcc;
+    fmt.fmt.pix.field = V4L2_FIELD_NONE;
+    if (Ioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) Fail("VIDIOC_S_FMT " + want_name);
+    if (fmt.fmt.pix.pixelformat != fourcc) {
+      Refuse("does not offer " + want_name + " (it offers " + FourCc(fmt.fmt.pix.pixelformat) +
+             "); set v4l2.pixel_format");
+    }
+    format_ = want;
+    width_ = static_cast<int>(fmt.fmt.pix.width);
+    height_ = static_cast<int>(fmt.fmt.pix.height);
+    stride_ = static_cast<int>(fmt.fmt.pix.bytesperline);
+    if (width_ != opt_.width || height_ != opt_.height) {
+      Refuse("asked for " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
+             ", the driver offers " + std::to_string(width_) + "x" + std::to_string(height_));
+    }
+  }
+
+  // Not every driver can set its rate: then the driver's own rate stands.
+  void SetFrameRate() {
+    v4l2_streamparm parm{};
+    parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    parm.parm.capture.timeperframe.numerator = 1000;
+    parm.parm.capture.timeperframe.denominator =
+        static_cast<uint32_t>(std::lround(opt_.fps * 1000));
+    if (Ioctl(fd_, VIDIOC_S_PARM, &parm) == 0 && parm.parm.capture.timeperframe.denominator > 0) {
+      frame_period_ns_ = static_cast<TimeNs>(1e9 * parm.parm.capture.timeperframe.numerator /
+                                             parm.parm.capture.timeperframe.denominator);
+    } else {
+      frame_period_ns_ = static_cast<TimeNs>(1e9 / opt_.fps);
+    }
+  }
+
+  // At least four mmap buffers, all queued.
+  void MapBuffers() {
+    v4l2_requestbuffers req{};
+    req.count = static_cast<uint32_t>(opt_.buffers);
+    req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+    req.memory = V4L2_MEMORY_MMAP;
+    if (Ioctl(fd_, VIDIOC_REQBUFS, &req) != 0) Fail("VIDIOC_REQBUFS (mmap)");
+    if (req.count < 4) Refuse("only " + std::to_string(req.count) + " buffers (need >= 4)");
+    buffers_.resize(req.count);
+    for (uint32_t i = 0; i < req.count; ++i) {
+      v4l2_buffer b{};
+      b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
+      b.memory = V4L2_MEMORY_MMAP;
+      b.index = i;
+      if (Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0) Fail("VIDIOC_QUERYBUF");
+      void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
+      if (p == MAP_FAILED) Fail("mmap");
+      buffers_[i] = {p, b.length};
+      if (Ioctl(fd_, VIDIOC_QBUF, &b) != 0) Fail("VIDIOC_QBUF");
+    }
+  }
+
+  // A failed system call: closes the device, throws with errno's text.
   [[noreturn]] void Fail(const std::string& what) {
     const std::string msg = opt_.device + ": " + what + " failed: " + std::strerror(errno);
     Close();
     throw SourceError(msg);
+  }
+  // The device works but cannot do what was asked.
+  [[noreturn]] void Refuse(const std::string& why) {
+    Close();
+    throw SourceError(opt_.device + ": " + why);
   }
 
   void SetControls() {
@@ -204,7 +233,8 @@ class V4l2Source final : public FrameSource {
     v4l2_query_ext_ctrl q{};
     q.id = V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND;
     while (Ioctl(fd_, VIDIOC_QUERY_EXT_CTRL, &q) == 0) {
-      if (!(q.flags & V4L2_CTRL_FLAG_DISABLED) && q.type != V4L2_CTRL_TYPE_CTRL_CLASS) found[ControlKey(q.name)] = q;
+      if (!(q.flags & V4L2_CTRL_FLAG_DISABLED) && q.type != V4L2_CTRL_TYPE_CTRL_CLASS)
+        found[ControlKey(q.name)] = q;
       q.id |= V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND;
     }
     for (const auto& [key, value] : opt_.controls) {
@@ -212,12 +242,12 @@ class V4l2Source final : public FrameSource {
       if (it == found.end()) {
         std::string names;
         for (const auto& [k, _] : found) names += (names.empty() ? "" : ", ") + k;
-        throw SourceError(opt_.device + ": no control '" + key + "' (it has: " + names + ")");
+        Refuse("no control '" + key + "' (it has: " + names + ")");
       }
       const auto& qc = it->second;
       if (value < qc.minimum || value > qc.maximum) {
-        throw SourceError(opt_.device + ": control '" + key + "' = " + std::to_string(value) + " outside [" +
-                          std::to_string(qc.minimum) + ", " + std::to_string(qc.maximum) + "]");
+        Refuse("control '" + key + "' = " + std::to_string(value) + " outside [" +
+               std::to_string(qc.minimum) + ", " + std::to_string(qc.maximum) + "]");
       }
       v4l2_control ctl{qc.id, static_cast<int32_t>(value)};
       if (Ioctl(fd_, VIDIOC_S_CTRL, &ctl) != 0) Fail("setting control '" + key + "'");
@@ -228,7 +258,10 @@ class V4l2Source final : public FrameSource {
     if (fd_ < 0) return;
     if (streaming_) {
       v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-      Ioctl(fd_, VIDIOC_STREAMOFF, &type);
+      // A device that vanished fails here too; the buffers and fd are released regardless.
+      if (Ioctl(fd_, VIDIOC_STREAMOFF, &type) != 0) {
+        spdlog::warn("{}: VIDIOC_STREAMOFF failed: {}", opt_.device, std::strerror(errno));
+      }
       streaming_ = false;
     }
     for (auto& b : buffers_) {
@@ -251,14 +284,14 @@ class V4l2Source final : public FrameSource {
   PixelFormat format_ = PixelFormat::kGrey;
   int width_ = 0, height_ = 0, stride_ = 0;
   TimeNs frame_period_ns_ = 0;
-  uint32_t last_seq_ = 0;
-  bool have_seq_ = false;
-  int64_t drops_ = 0;
+  SequenceGaps gaps_;
   std::atomic<bool> stop_{false};
 };
 
 }  // namespace
 
-std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o) { return std::make_unique<V4l2Source>(o); }
+std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o) {
+  return std::make_unique<V4l2Source>(o);
+}
 
 }  // namespace kincal::daemon

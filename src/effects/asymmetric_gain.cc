@@ -24,7 +24,8 @@ class AsymmetricGain final : public EffectImpl<AsymmetricGain> {
     if (!BindChannels(model, channels, &channels_, error)) return false;
     params_.clear();
     for (int c : channels_) {
-      params_.push_back({"asym_" + model.controls()[static_cast<size_t>(c)].name, "1", 0.0, 0.1, "commands of both signs"});
+      params_.push_back({"asym_" + model.controls()[static_cast<size_t>(c)].name, "1", 0.0, 0.1,
+                         "commands of both signs"});
     }
     return true;
   }

@@ -33,7 +33,7 @@ class Backlash final : public EffectImpl<Backlash> {
     }
     const auto& ch = model.controls()[static_cast<size_t>(channel_)];
     params_ = {{"backlash", ch.unit, 0.0, ch.unit == "rad" ? 0.02 : 20.0,
-                 "steering reversals while driving"}};
+                "steering reversals while driving"}};
     return true;
   }
   template <class T>

@@ -16,7 +16,8 @@ class EffectiveTrack final : public EffectImpl<EffectiveTrack> {
   }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"c_track", "s/rad", 0.0, 0.1, "turns at several different turn rates"}};
+    static const std::vector<ParamInfo> kParams = {
+        {"c_track", "s/rad", 0.0, 0.1, "turns at several different turn rates"}};
     return kParams;
   }
   std::vector<std::string> signature() const override { return {"heading:turn_rate_sq"}; }

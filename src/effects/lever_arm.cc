@@ -16,11 +16,15 @@ class LeverArm final : public EffectImpl<LeverArm> {
   std::string_view description() const override {
     return "target offset (dx, dy, dtheta) from the kinematic reference point";
   }
-  std::vector<std::string> signature() const override { return {"along:turn_rate", "cross:turn_rate", "heading:const"}; }
+  std::vector<std::string> signature() const override {
+    return {"along:turn_rate", "cross:turn_rate", "heading:const"};
+  }
   EffectStage stage() const override { return EffectStage::kMeasurement; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"dx", "m", 0.0, 0.05, "rotation: turning in place or tight turns"}, {"dy", "m", 0.0, 0.05, "rotation: turning in place or tight turns"}, {"dtheta", "rad", 0.0, 0.05, "straight driving (heading against the direction of travel)"}};
+        {"dx", "m", 0.0, 0.05, "rotation: turning in place or tight turns"},
+        {"dy", "m", 0.0, 0.05, "rotation: turning in place or tight turns"},
+        {"dtheta", "rad", 0.0, 0.05, "straight driving (heading against the direction of travel)"}};
     return kParams;
   }
   template <class T>

@@ -11,10 +11,14 @@ class TimeOffset final : public EffectImpl<TimeOffset> {
   std::string_view description() const override {
     return "command stream delayed by delay_s relative to the poses";
   }
-  std::vector<std::string> signature() const override { return {"along:accel", "heading:yaw_accel"}; }
+  std::vector<std::string> signature() const override {
+    return {"along:accel", "heading:yaw_accel"};
+  }
   EffectStage stage() const override { return EffectStage::kControlTiming; }
   const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"delay_s", "s", 0.0, 0.1, "changes of command: starts, stops, speed and turn-rate changes"}};
+    static const std::vector<ParamInfo> kParams = {
+        {"delay_s", "s", 0.0, 0.1,
+         "changes of command: starts, stops, speed and turn-rate changes"}};
     return kParams;
   }
   template <class T>

@@ -17,7 +17,8 @@ class YawRateBias final : public EffectImpl<YawRateBias> {
   std::vector<std::string> signature() const override { return {"heading:moving"}; }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
-    static const std::vector<ParamInfo> kParams = {{"bias_rad_s", "rad/s", 0.0, 0.05, "long stretches of motion"}};
+    static const std::vector<ParamInfo> kParams = {
+        {"bias_rad_s", "rad/s", 0.0, 0.05, "long stretches of motion"}};
     return kParams;
   }
   template <class T>

@@ -36,7 +36,8 @@ class SegmentCost final : public ceres::CostFunction {
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    const bool want_jac = jacobians != nullptr && (jacobians[0] != nullptr || jacobians[1] != nullptr);
+    const bool want_jac =
+        jacobians != nullptr && (jacobians[0] != nullptr || jacobians[1] != nullptr);
     if (!want_jac) return Run<double>(parameters, residuals, nullptr);
     if (3 + sys_.num_params() <= kBatchJetSize) return Run<BJet>(parameters, residuals, jacobians);
     return Run<Jet>(parameters, residuals, jacobians);
@@ -177,7 +178,8 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
     pb->costs.push_back(cost);
     pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
   }
-  if (options.prior) pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
+  if (options.prior)
+    pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
   // Physical bounds (lengths > 0, time constants >= 0).
   for (int i = 0; i < sys.num_params(); ++i) {
     const double lo = sys.params()[static_cast<size_t>(i)].min_value;

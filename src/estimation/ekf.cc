@@ -33,8 +33,7 @@ class Ekf final : public Filter {
     P_ = 0.5 * (P_ + P_.transpose()).eval();
   }
 
-  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z,
-                      const MeasMat& Sw) override {
+  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z, const MeasMat& Sw) override {
     const int n = static_cast<int>(x_.size());
     const int m = hf.meas_dim();
     const uint32_t zmask = internal::MeasAngleMask(hf);

@@ -77,7 +77,8 @@ NoiseMat ProcessNoiseSqrt(const System& sys, const ProcessNoiseOptions& noise, d
     Sv(c, c) = std::sqrt(noise.control_psd[static_cast<size_t>(c)] / dt_s);
   }
   for (int i = 0; i < 3; ++i) Sv(nc + i, nc + i) = std::sqrt(noise.pose_psd[i] * dt_s);
-  for (int i = nc + 3; i < sys.noise_dim(); ++i) Sv(i, i) = std::sqrt(noise.effect_state_psd * dt_s);
+  for (int i = nc + 3; i < sys.noise_dim(); ++i)
+    Sv(i, i) = std::sqrt(noise.effect_state_psd * dt_s);
   return Sv;
 }
 
@@ -104,8 +105,8 @@ void OnlineCalibrator::Initialize(TimeNs t_ns, const Eigen::Vector3d& pose,
                                   const StateMat& params_cov) {
   const int n = sys_.state_dim();
   const int np = sys_.num_params();
-  StateVec x = sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_,
-                              controls_.ToSeconds(t_ns));
+  StateVec x =
+      sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_, controls_.ToSeconds(t_ns));
   StateMat P = StateMat::Zero(n, n);
   P.topLeftCorner(3, 3) = pose_cov;  // replaced by ResetPose below
   P.block(3, 3, np, np) = params_cov;
@@ -162,8 +163,7 @@ UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
   return r;
 }
 
-void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z,
-                                 const Eigen::Matrix3d& R) {
+void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z, const Eigen::Matrix3d& R) {
   // The camera measures the target pose; the state holds the reference pose. Invert the
   // measurement map at the current parameters, x_pose = g(z, p), and propagate the
   // covariance through its Jacobians: the pose inherits the uncertainty of a lever arm

@@ -70,8 +70,7 @@ class SrDd2 final : public Filter {
     Triangularize(A, &S_);
   }
 
-  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z,
-                      const MeasMat& Sw) override {
+  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z, const MeasMat& Sw) override {
     const int n = static_cast<int>(x_.size());
     const int m = hf.meas_dim();
     const uint32_t zmask = internal::MeasAngleMask(hf);
@@ -136,7 +135,6 @@ class SrDd2 final : public Filter {
 
   const StateVec& mean() const override { return x_; }
   StateMat covariance() const override { return S_ * S_.transpose(); }
-
 
  private:
   StateVec x_;

@@ -58,8 +58,7 @@ class Ukf final : public Filter {
     }
   }
 
-  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z,
-                      const MeasMat& Sw) override {
+  UpdateResult Update(const MeasurementFunction& hf, const MeasVec& z, const MeasMat& Sw) override {
     const int n = static_cast<int>(x_.size());
     const int m = hf.meas_dim();
     const uint32_t zmask = internal::MeasAngleMask(hf);

@@ -1,13 +1,13 @@
 // Reads controls and poses from a kincald LCM event log.
-#include <kincal/controls_t.hpp>
-#include <kincal/pose_t.hpp>
-
-#include <cmath>
-#include <optional>
 #include <sys/stat.h>
 
+#include <cmath>
+#include <kincal/controls_t.hpp>
+#include <kincal/pose_t.hpp>
+#include <optional>
+
 #include "kincal/angles.h"
-#include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
 
@@ -35,11 +35,12 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   LcmLogEvent e;
   const LcmLogEvent* ev = &e;
   while (log->Next(&e)) {
-    const std::string where = path + ": event " + std::to_string(ev->eventnum) + " (byte " + std::to_string(ev->offset) + ")";
+    const std::string where = path + ": event " + std::to_string(ev->eventnum) + " (byte " +
+                              std::to_string(ev->offset) + ")";
     if (ev->channel == controls_channel) {
       kincal::controls_t m;
       std::string why;
-      if (!daemon::PlausibleControls(ev->data.data(), ev->data.size(), kMaxControls, &why)) {
+      if (!PlausibleControls(ev->data.data(), ev->data.size(), kMaxControls, &why)) {
         throw RecordingError(where + " on " + ev->channel + ": " + why);
       }
       if (m.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0) {
@@ -54,7 +55,8 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
                                "' is not a control of model '" + std::string(model.name()) + "'");
         }
         if (!std::isfinite(m.values[static_cast<size_t>(i)])) {
-          throw RecordingError(where + ": control '" + m.names[static_cast<size_t>(i)] + "' is not finite");
+          throw RecordingError(where + ": control '" + m.names[static_cast<size_t>(i)] +
+                               "' is not finite");
         }
         v[static_cast<size_t>(k)] = m.values[static_cast<size_t>(i)];
         seen[static_cast<size_t>(k)] = true;
@@ -79,8 +81,10 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   if (controls.empty()) throw RecordingError(path + ": no controls on channel " + controls_channel);
   if (poses.empty()) throw RecordingError(path + ": no poses on channel " + pose_channel);
   // Logs are written in arrival order; sort each stream by its own stamps (stable).
-  std::stable_sort(controls.begin(), controls.end(), [](const C& a, const C& b) { return a.t < b.t; });
-  std::stable_sort(poses.begin(), poses.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(controls.begin(), controls.end(),
+                   [](const C& a, const C& b) { return a.t < b.t; });
+  std::stable_sort(poses.begin(), poses.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   Recording rec;
   rec.source = path;
   rec.origin_s = std::min(controls.front().t, poses.front().first);
@@ -105,8 +109,9 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   // Damage is not fatal (the rest of the log is still good) but never silent.
   for (const auto& p : log->problems()) rec.warnings.push_back(p);
   if (log->damaged_stretches() > static_cast<int64_t>(log->problems().size())) {
-    rec.warnings.push_back(path + ": " + std::to_string(log->damaged_stretches()) + " damaged stretches in all, " +
-                           std::to_string(log->damaged_bytes()) + " bytes skipped");
+    rec.warnings.push_back(path + ": " + std::to_string(log->damaged_stretches()) +
+                           " damaged stretches in all, " + std::to_string(log->damaged_bytes()) +
+                           " bytes skipped");
   }
   return rec;
 }

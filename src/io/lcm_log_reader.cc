@@ -19,7 +19,8 @@ uint64_t BigEndian(const uint8_t* p, int n) {
 LcmLogReader::LcmLogReader(const std::string& path) : path_(path) {
   f_ = std::fopen(path.c_str(), "rb");
   if (f_ == nullptr) throw std::runtime_error(path + ": cannot open the LCM log for reading");
-  if (std::fseek(f_, 0, SEEK_END) != 0 || (size_ = std::ftell(f_)) < 0 || std::fseek(f_, 0, SEEK_SET) != 0) {
+  if (std::fseek(f_, 0, SEEK_END) != 0 || (size_ = std::ftell(f_)) < 0 ||
+      std::fseek(f_, 0, SEEK_SET) != 0) {
     std::fclose(f_);
     throw std::runtime_error(path + ": cannot determine the size of the LCM log");
   }
@@ -75,7 +76,8 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
       pos_ = size_;
       return false;
     }
-    if (std::fseek(f_, start, SEEK_SET) != 0 || std::fread(h, 1, kHeaderBytes, f_) != kHeaderBytes) {
+    if (std::fseek(f_, start, SEEK_SET) != 0 ||
+        std::fread(h, 1, kHeaderBytes, f_) != kHeaderBytes) {
       Problem("byte " + std::to_string(start) + ": read error");
       pos_ = size_;
       return false;
@@ -86,7 +88,8 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
     const int32_t channel_len = static_cast<int32_t>(BigEndian(h + 20, 4));
     const int32_t data_len = static_cast<int32_t>(BigEndian(h + 24, 4));
     const int64_t body = static_cast<int64_t>(channel_len) + data_len;
-    const bool header_ok = sync == kSync && channel_len > 0 && channel_len <= kMaxChannelLength && data_len >= 0;
+    const bool header_ok =
+        sync == kSync && channel_len > 0 && channel_len <= kMaxChannelLength && data_len >= 0;
     if (header_ok && body > left - kHeaderBytes) {
       // Consistent header, but the body runs past the end of the file: either the last
       // event was cut short, or a damaged length. A later sync word decides.
@@ -94,9 +97,9 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
       if (!Resync(start, start + 1)) {
         truncated_ = true;
         ++damaged_stretches_;
-        Problem("byte " + std::to_string(start) + ": event " + std::to_string(eventnum) + " needs " +
-                std::to_string(kHeaderBytes + body) + " bytes but " + std::to_string(left) +
-                " remain (log cut short); it is lost");
+        Problem("byte " + std::to_string(start) + ": event " + std::to_string(eventnum) +
+                " needs " + std::to_string(kHeaderBytes + body) + " bytes but " +
+                std::to_string(left) + " remain (log cut short); it is lost");
         return false;
       }
       ++damaged_stretches_;
@@ -111,7 +114,8 @@ bool LcmLogReader::Next(LcmLogEvent* ev) {
       ++damaged_stretches_;
       Problem("byte " + std::to_string(start) + ": " +
               (sync == kSync ? "event header with channel length " + std::to_string(channel_len) +
-                                   " and data length " + std::to_string(data_len) + " (expected 1-63 and >= 0)"
+                                   " and data length " + std::to_string(data_len) +
+                                   " (expected 1-63 and >= 0)"
                              : std::string("expected the sync word 0xEDA1DA01")) +
               "; skipped " + std::to_string(damaged_bytes_ - before) + " bytes" +
               (found ? " to the next event" : " to the end of the file"));

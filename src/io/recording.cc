@@ -78,7 +78,8 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     if (order.empty()) {
       std::map<std::string, int> index;
       for (size_t i = 0; i < cols.size(); ++i) {
-        if (index.count(cols[i])) throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
+        if (index.count(cols[i]))
+          throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
         index[cols[i]] = static_cast<int>(i);
       }
       std::string expected = "t";
@@ -139,7 +140,9 @@ std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
                            std::to_string(cols.size()));
     }
     Row r{n, ParseNumber(cols[0], where, "time"), {}};
-    for (int k = 1; k < columns; ++k) r.v.push_back(ParseNumber(cols[static_cast<size_t>(k)], where, "value " + std::to_string(k + 1)));
+    for (int k = 1; k < columns; ++k)
+      r.v.push_back(
+          ParseNumber(cols[static_cast<size_t>(k)], where, "value " + std::to_string(k + 1)));
     rows.push_back(std::move(r));
   }
   return rows;
@@ -151,9 +154,9 @@ void CheckOrder(const std::vector<Row>& rows, const std::string& path, const cha
     if (rows[i].t < rows[i - 1].t) {
       std::ostringstream m;
       m.precision(15);
-      m << path << ":" << rows[i].line << ": time " << rows[i].t << " goes backwards (previous row, line "
-        << rows[i - 1].line << ", has " << rows[i - 1].t << "); " << what
-        << " rows must be in time order";
+      m << path << ":" << rows[i].line << ": time " << rows[i].t
+        << " goes backwards (previous row, line " << rows[i - 1].line << ", has " << rows[i - 1].t
+        << "); " << what << " rows must be in time order";
       throw RecordingError(m.str());
     }
   }

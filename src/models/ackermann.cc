@@ -21,9 +21,10 @@ class Ackermann final : public ModelImpl<Ackermann> {
   }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"r_b", "m", 0.05, 0.01, "forward motion", 1e-6},          // rear (virtual) wheel radius
-        {"l", "m", 0.3, 0.06, "driving with the wheels steered", 1e-6},             // wheelbase
-        {"steer_offset", "rad", 0.0, 0.05, "straight driving and turns to both sides"},  // added to the commanded steering angle
+        {"r_b", "m", 0.05, 0.01, "forward motion", 1e-6},  // rear (virtual) wheel radius
+        {"l", "m", 0.3, 0.06, "driving with the wheels steered", 1e-6},  // wheelbase
+        {"steer_offset", "rad", 0.0, 0.05,
+         "straight driving and turns to both sides"},  // added to the commanded steering angle
     };
     return kParams;
   }

@@ -16,15 +16,17 @@ class DiffDrive final : public ModelImpl<DiffDrive> {
   }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"r_l", "m", 0.03, 0.005, "forward motion and turns of several radii", 1e-6},  // left wheel radius
-        {"r_r", "m", 0.03, 0.005, "forward motion and turns of several radii", 1e-6},  // right wheel radius
-        {"d", "m", 0.15, 0.03, "turns of several radii, including turning in place", 1e-6},     // wheel separation
+        {"r_l", "m", 0.03, 0.005, "forward motion and turns of several radii",
+         1e-6},  // left wheel radius
+        {"r_r", "m", 0.03, 0.005, "forward motion and turns of several radii",
+         1e-6},  // right wheel radius
+        {"d", "m", 0.15, 0.03, "turns of several radii, including turning in place",
+         1e-6},  // wheel separation
     };
     return kParams;
   }
   const std::vector<ControlInfo>& controls() const override {
-    static const std::vector<ControlInfo> kControls = {{"omega_l", "rad/s"},
-                                                       {"omega_r", "rad/s"}};
+    static const std::vector<ControlInfo> kControls = {{"omega_l", "rad/s"}, {"omega_r", "rad/s"}};
     return kControls;
   }
   template <typename T>

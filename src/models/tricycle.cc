@@ -19,10 +19,13 @@ class Tricycle final : public ModelImpl<Tricycle> {
   }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"k_steer", "rad/tick", 0.001, 0.0002, "driving at several steering angles"},  // steering angle per encoder tick
-        {"steer_offset", "rad", 0.0, 0.05, "straight driving and turns to both sides"},      // steering angle at zero ticks
-        {"k_drive", "m/tick", 1e-4, 2e-5, "forward motion"},       // front-wheel travel per drive tick
-        {"wheelbase", "m", 0.5, 0.1, "driving with the wheel steered", 1e-6},            // front wheel to rear axle
+        {"k_steer", "rad/tick", 0.001, 0.0002,
+         "driving at several steering angles"},  // steering angle per encoder tick
+        {"steer_offset", "rad", 0.0, 0.05,
+         "straight driving and turns to both sides"},         // steering angle at zero ticks
+        {"k_drive", "m/tick", 1e-4, 2e-5, "forward motion"},  // front-wheel travel per drive tick
+        {"wheelbase", "m", 0.5, 0.1, "driving with the wheel steered",
+         1e-6},  // front wheel to rear axle
     };
     return kParams;
   }

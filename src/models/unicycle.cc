@@ -15,7 +15,8 @@ class Unicycle final : public ModelImpl<Unicycle> {
   }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {
-        {"k_v", "1", 1.0, 0.2, "forward (or backward) motion"},      // realised / commanded forward speed
+        {"k_v", "1", 1.0, 0.2,
+         "forward (or backward) motion"},       // realised / commanded forward speed
         {"k_omega", "1", 1.0, 0.2, "turning"},  // realised / commanded turn rate
     };
     return kParams;

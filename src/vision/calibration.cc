@@ -105,8 +105,10 @@ bool DltView(const CalibrationView& v, Eigen::Matrix3d* K, Eigen::Matrix3d* R, E
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector4d X = v.object[i].homogeneous();
     const double u = v.image[i].x(), w = v.image[i].y();
-    A.row(static_cast<long>(2 * i)) << X.transpose(), Eigen::RowVector4d::Zero(), -u * X.transpose();
-    A.row(static_cast<long>(2 * i + 1)) << Eigen::RowVector4d::Zero(), X.transpose(), -w * X.transpose();
+    A.row(static_cast<long>(2 * i)) << X.transpose(), Eigen::RowVector4d::Zero(),
+        -u * X.transpose();
+    A.row(static_cast<long>(2 * i + 1)) << Eigen::RowVector4d::Zero(), X.transpose(),
+        -w * X.transpose();
   }
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
   const Eigen::VectorXd p = svd.matrixV().col(11);
@@ -171,14 +173,17 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
       header = true;
       continue;
     }
-    if (cols.size() != 6) throw std::runtime_error(where + ": expected 6 values, found " + std::to_string(cols.size()));
+    if (cols.size() != 6)
+      throw std::runtime_error(where + ": expected 6 values, found " + std::to_string(cols.size()));
     double v[5];
     for (int k = 0; k < 5; ++k) {
       try {
         size_t used = 0;
         v[k] = std::stod(cols[static_cast<size_t>(k + 1)], &used);
       } catch (const std::exception&) {
-        throw std::runtime_error(where + ": column " + std::to_string(k + 2) + ": expected a number, got '" + cols[static_cast<size_t>(k + 1)] + "'");
+        throw std::runtime_error(where + ": column " + std::to_string(k + 2) +
+                                 ": expected a number, got '" + cols[static_cast<size_t>(k + 1)] +
+                                 "'");
       }
     }
     if (!views.count(cols[0])) {
@@ -235,7 +240,8 @@ CalibrationResult Refine(const std::vector<CalibrationView>& views, const Calibr
   for (const auto& p : poses) {
     Pose3 q;
     const Eigen::Vector3d w(p[0], p[1], p[2]);
-    q.R = w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() : Eigen::Matrix3d::Identity();
+    q.R = w.norm() > 0 ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                       : Eigen::Matrix3d::Identity();
     q.t = Eigen::Vector3d(p[3], p[4], p[5]);
     r.board_poses.push_back(q);
   }
@@ -265,7 +271,9 @@ CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
     Eigen::Matrix3d K, R;
     Eigen::Vector3d t;
     if (!DltView(views[static_cast<size_t>(i)], &K, &R, &t)) {
-      throw std::runtime_error(views[static_cast<size_t>(i)].name + ": degenerate view (the DLT found no camera in front of the points)");
+      throw std::runtime_error(
+          views[static_cast<size_t>(i)].name +
+          ": degenerate view (the DLT found no camera in front of the points)");
     }
     Ksum += K;
     ++used;
@@ -288,13 +296,17 @@ CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
 
 CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
                                   const CalibrationOptions& o) {
-  if (o.width <= 0 || o.height <= 0) throw std::runtime_error("calibration: image size must be given (WxH)");
-  if (views_in.size() < 3) throw std::runtime_error("calibration: at least 3 views are needed, got " + std::to_string(views_in.size()));
+  if (o.width <= 0 || o.height <= 0)
+    throw std::runtime_error("calibration: image size must be given (WxH)");
+  if (views_in.size() < 3)
+    throw std::runtime_error("calibration: at least 3 views are needed, got " +
+                             std::to_string(views_in.size()));
   // Planar boards: shift each view's plane to Z = 0.
   std::vector<CalibrationView> views = views_in;
   for (auto& v : views) {
     if (v.object.size() < 6 || v.object.size() != v.image.size()) {
-      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " + std::to_string(v.object.size()));
+      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " +
+                               std::to_string(v.object.size()));
     }
     const double z0 = v.object.front().z();
     bool planar = true;
@@ -305,7 +317,8 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
     for (const auto& p : v.image) {
       if (p.x() < -0.5 || p.y() < -0.5 || p.x() > o.width - 0.5 || p.y() > o.height - 0.5) {
         std::ostringstream m;
-        m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the " << o.width << "x" << o.height << " image";
+        m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the "
+          << o.width << "x" << o.height << " image";
         throw std::runtime_error(m.str());
       }
     }
@@ -341,7 +354,9 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
   const double beta = std::sqrt(lambda * B11 / (B11 * B22 - B12 * B12));
   const double u0 = -B13 * alpha * alpha / lambda;
   if (!std::isfinite(alpha) || !std::isfinite(beta) || !std::isfinite(u0) || !std::isfinite(v0)) {
-    throw std::runtime_error("calibration: degenerate views (all boards parallel, or too few orientations); tilt the board differently in each view");
+    throw std::runtime_error(
+        "calibration: degenerate views (all boards parallel, or too few orientations); tilt the "
+        "board differently in each view");
   }
   Eigen::Matrix3d K;
   K << alpha, 0, u0, 0, beta, v0, 0, 0, 1;

@@ -32,7 +32,8 @@ TargetLayout ReadTargetLayoutYaml(const std::string& path) {
     for (const auto& m : n["markers"]) {
       const auto v = m.as<std::vector<double>>();
       if (v.size() != 2) {
-        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) + ": a marker is [x, y] in metres");
+        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) +
+                                 ": a marker is [x, y] in metres");
       }
       t.markers.emplace_back(v[0], v[1]);
     }
@@ -43,7 +44,6 @@ TargetLayout ReadTargetLayoutYaml(const std::string& path) {
   if (!t.IsValid(&error)) throw std::runtime_error(path + ": " + error);
   return t;
 }
-
 
 FloorExtrinsics ReadFloorYaml(const std::string& path) {
   cv::FileStorage fs;
@@ -59,14 +59,16 @@ FloorExtrinsics ReadFloorYaml(const std::string& path) {
   if (R.rows != 3 || R.cols != 3 || R.type() != CV_64F) {
     throw std::runtime_error(path + ": expected a 3x3 double matrix 'R_cf' (from kincal floorcal)");
   }
-  if (t.total() != 3 || t.type() != CV_64F) throw std::runtime_error(path + ": expected a 3-vector 't_cf'");
+  if (t.total() != 3 || t.type() != CV_64F)
+    throw std::runtime_error(path + ": expected a 3-vector 't_cf'");
   FloorExtrinsics f;
   for (int i = 0; i < 3; ++i) {
     f.t_cf[i] = t.at<double>(i);
     for (int j = 0; j < 3; ++j) f.R_cf(i, j) = R.at<double>(i, j);
   }
   if (!f.R_cf.allFinite() || !f.t_cf.allFinite() ||
-      (f.R_cf.transpose() * f.R_cf - Eigen::Matrix3d::Identity()).norm() > 1e-6 || f.R_cf.determinant() < 0) {
+      (f.R_cf.transpose() * f.R_cf - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
+      f.R_cf.determinant() < 0) {
     throw std::runtime_error(path + ": R_cf is not a rotation");
   }
   return f;

@@ -15,9 +15,11 @@ namespace kincal::vision {
 
 bool DetectorOptions::IsValid(std::string* error) const {
   if (threshold > 255 || min_area_px < 1 || max_area_px < min_area_px || !(min_circularity > 0) ||
-      min_circularity > 1 || !(min_fill > 0) || min_fill > 1 || min_contrast < 0 || min_contrast > 255) {
-    *error = "detector: threshold <= 255, 1 <= min_area <= max_area, circularity and fill in (0, 1], "
-             "min_contrast in [0, 255]";
+      min_circularity > 1 || !(min_fill > 0) || min_fill > 1 || min_contrast < 0 ||
+      min_contrast > 255) {
+    *error =
+        "detector: threshold <= 255, 1 <= min_area <= max_area, circularity and fill in (0, 1], "
+        "min_contrast in [0, 255]";
     return false;
   }
   return true;
@@ -35,7 +37,8 @@ struct Blob {
 
 int Find(std::vector<Blob>& b, int i) {
   while (b[static_cast<size_t>(i)].parent != i) {
-    b[static_cast<size_t>(i)].parent = b[static_cast<size_t>(b[static_cast<size_t>(i)].parent)].parent;
+    b[static_cast<size_t>(i)].parent =
+        b[static_cast<size_t>(b[static_cast<size_t>(i)].parent)].parent;
     i = b[static_cast<size_t>(i)].parent;
   }
   return i;
@@ -59,7 +62,8 @@ int OtsuThreshold(const cv::Mat& view, int min_contrast) {
     }
   }
   double sum = 0;
-  for (int i = 0; i < 256; ++i) sum += static_cast<double>(i) * static_cast<double>(hist[static_cast<size_t>(i)]);
+  for (int i = 0; i < 256; ++i)
+    sum += static_cast<double>(i) * static_cast<double>(hist[static_cast<size_t>(i)]);
   double sum_b = 0, best = -1;
   int64_t w_b = 0;
   int thr = 128;
@@ -70,8 +74,10 @@ int OtsuThreshold(const cv::Mat& view, int min_contrast) {
     const int64_t w_f = n - w_b;
     if (w_f == 0) break;
     sum_b += static_cast<double>(t) * static_cast<double>(hist[static_cast<size_t>(t)]);
-    const double m_b = sum_b / static_cast<double>(w_b), m_f = (sum - sum_b) / static_cast<double>(w_f);
-    const double between = static_cast<double>(w_b) * static_cast<double>(w_f) * (m_b - m_f) * (m_b - m_f);
+    const double m_b = sum_b / static_cast<double>(w_b),
+                 m_f = (sum - sum_b) / static_cast<double>(w_f);
+    const double between =
+        static_cast<double>(w_b) * static_cast<double>(w_f) * (m_b - m_f) * (m_b - m_f);
     if (between > best) {
       best = between;
       thr = t;
@@ -95,7 +101,8 @@ inline int NextFg(const uint8_t* row, int x, int w, int thr) {
   const __m128i t = _mm_set1_epi8(static_cast<char>(kDark ? thr : std::min(thr + 1, 255)));
   while (x + 16 <= w) {
     const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
-    const __m128i hit = kDark ? _mm_cmpeq_epi8(_mm_min_epu8(v, t), v) : _mm_cmpeq_epi8(_mm_max_epu8(v, t), v);
+    const __m128i hit =
+        kDark ? _mm_cmpeq_epi8(_mm_min_epu8(v, t), v) : _mm_cmpeq_epi8(_mm_max_epu8(v, t), v);
     if (_mm_movemask_epi8(hit) != 0) break;
     x += 16;
   }
@@ -198,7 +205,8 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       if (rejected != nullptr) rejected->push_back({c0, why});
     };
     if (b.area < opt.min_area_px) {
-      if (b.area >= 4) reject("area " + std::to_string(b.area) + " < " + std::to_string(opt.min_area_px));
+      if (b.area >= 4)
+        reject("area " + std::to_string(b.area) + " < " + std::to_string(opt.min_area_px));
       continue;
     }
     if (b.area > opt.max_area_px) {
@@ -211,13 +219,15 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       continue;
     }
     // Second moments of the binary blob: ellipse axes.
-    const double sxx = b.sxx / area - mx * mx, syy = b.syy / area - my * my, sxy = b.sxy / area - mx * my;
+    const double sxx = b.sxx / area - mx * mx, syy = b.syy / area - my * my,
+                 sxy = b.sxy / area - mx * my;
     const double tr = sxx + syy, det = sxx * syy - sxy * sxy;
     const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
     const double l1 = std::max(0.5 * tr + disc, 1e-12), l2 = std::max(0.5 * tr - disc, 1e-12);
     const double circ = std::sqrt(l2 / l1);
     // A pixelated disk's moments include each pixel's own spread (1/12 per axis).
-    const double ellipse_area = 4.0 * M_PI * std::sqrt(std::max(l1 - 1.0 / 12.0, 1e-12) * std::max(l2 - 1.0 / 12.0, 1e-12));
+    const double ellipse_area =
+        4.0 * M_PI * std::sqrt(std::max(l1 - 1.0 / 12.0, 1e-12) * std::max(l2 - 1.0 / 12.0, 1e-12));
     const double fill = area / ellipse_area;
     if (circ < opt.min_circularity) {
       reject("circularity " + std::to_string(circ).substr(0, 4));
@@ -243,7 +253,8 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       border.push_back(view.at<uint8_t>(y, x0));
       border.push_back(view.at<uint8_t>(y, x1));
     }
-    std::nth_element(border.begin(), border.begin() + static_cast<long>(border.size() / 2), border.end());
+    std::nth_element(border.begin(), border.begin() + static_cast<long>(border.size() / 2),
+                     border.end());
     const double bg = border[border.size() / 2];
     for (int y = by; y < by + bh; ++y) {
       const uint8_t* row = view.ptr<uint8_t>(y);
@@ -255,7 +266,8 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
     if (opt.dark_on_light) {
       std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end());
     } else {
-      std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end(), std::greater<double>());
+      std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end(),
+                       std::greater<double>());
     }
     const double fg = inner[q];
     const double span = bg - fg;
@@ -283,8 +295,8 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
   return out;
 }
 
-bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vector<Marker>* markers,
-                    double max_rms) {
+bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout,
+                    std::vector<Marker>* markers, double max_rms) {
   const size_t m = layout.markers.size();
   const size_t n = markers->size();
   if (n < m || n > 12) return false;
@@ -373,7 +385,8 @@ std::vector<std::vector<Marker>> IdentifyTargets(const CameraModel& cam,
         rest.push_back(m);
       }
     }
-    std::sort(out[li].begin(), out[li].end(), [](const Marker& a, const Marker& b) { return a.id < b.id; });
+    std::sort(out[li].begin(), out[li].end(),
+              [](const Marker& a, const Marker& b) { return a.id < b.id; });
     pool = rest;
   }
   return out;
@@ -385,13 +398,15 @@ double CorrectPerspectiveBias(const CameraModel& cam, const Pose3& pose, const T
   for (auto& m : *markers) {
     if (m.id < 0 || m.id >= static_cast<int>(layout.markers.size())) continue;
     const Eigen::Vector2d c = layout.markers[static_cast<size_t>(m.id)];
-    const Eigen::Vector2d centre = cam.Project(pose.R * Eigen::Vector3d(c.x(), c.y(), 0.0) + pose.t);
+    const Eigen::Vector2d centre =
+        cam.Project(pose.R * Eigen::Vector3d(c.x(), c.y(), 0.0) + pose.t);
     // Area centroid of the projected boundary polygon.
     constexpr int kN = 96;
     std::array<Eigen::Vector2d, kN> b;
     for (int k = 0; k < kN; ++k) {
       const double a = 2.0 * M_PI * k / kN;
-      const Eigen::Vector3d p(c.x() + layout.marker_radius_m * std::cos(a), c.y() + layout.marker_radius_m * std::sin(a), 0.0);
+      const Eigen::Vector3d p(c.x() + layout.marker_radius_m * std::cos(a),
+                              c.y() + layout.marker_radius_m * std::sin(a), 0.0);
       b[static_cast<size_t>(k)] = cam.Project(pose.R * p + pose.t);
     }
     double area = 0;
@@ -438,10 +453,12 @@ std::vector<Marker> MarkerTracker::Track(const cv::Mat& grey) {
     u1 = std::max(u1, m.centre_px.x() + m.diameter_px);
     v1 = std::max(v1, m.centre_px.y() + m.diameter_px);
   }
-  roi_ = cv::Rect(static_cast<int>(u0) - margin_, static_cast<int>(v0) - margin_,
-                  static_cast<int>(u1 - u0) + 2 * margin_, static_cast<int>(v1 - v0) + 2 * margin_) &
-         cv::Rect(0, 0, grey.cols, grey.rows);
-  std::sort(target.begin(), target.end(), [](const Marker& a, const Marker& b) { return a.id < b.id; });
+  roi_ =
+      cv::Rect(static_cast<int>(u0) - margin_, static_cast<int>(v0) - margin_,
+               static_cast<int>(u1 - u0) + 2 * margin_, static_cast<int>(v1 - v0) + 2 * margin_) &
+      cv::Rect(0, 0, grey.cols, grey.rows);
+  std::sort(target.begin(), target.end(),
+            [](const Marker& a, const Marker& b) { return a.id < b.id; });
   return target;
 }
 

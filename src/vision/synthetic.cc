@@ -25,8 +25,8 @@ std::vector<CalibrationView> SyntheticBoardViews(const CameraModel& cam, int n_v
                                Eigen::AngleAxisd(0.5 * ay, Eigen::Vector3d::UnitY()) *
                                Eigen::AngleAxisd(0.3 * ax, Eigen::Vector3d::UnitZ()))
                                   .toRotationMatrix();
-    const Eigen::Vector3d t =
-        Eigen::Vector3d(-0.1, 0.06, 0.7) + uniform3().cwiseProduct(Eigen::Vector3d(0.08, 0.05, 0.2));
+    const Eigen::Vector3d t = Eigen::Vector3d(-0.1, 0.06, 0.7) +
+                              uniform3().cwiseProduct(Eigen::Vector3d(0.08, 0.05, 0.2));
     bool inside = true;
     for (int r = 0; r < 6; ++r) {
       for (int c = 0; c < 9; ++c) {

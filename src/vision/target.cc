@@ -29,7 +29,8 @@ bool TargetLayout::IsValid(std::string* error) const {
 namespace {
 
 // Blur, vignetting, noise and 8-bit quantisation of a rendered radiance image.
-cv::Mat Finish(const CameraModel& cam, cv::Mat img, const RenderOptions& opt, std::mt19937_64& rng) {
+cv::Mat Finish(const CameraModel& cam, cv::Mat img, const RenderOptions& opt,
+               std::mt19937_64& rng) {
   if (opt.blur_sigma_px > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), opt.blur_sigma_px);
   std::normal_distribution<double> g(0.0, opt.noise_sigma);
   const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
@@ -62,8 +63,10 @@ RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const Targ
     double u0 = 1e300, u1 = -1e300, v0 = 1e300, v1 = -1e300;
     for (int k = 0; k < 32; ++k) {
       const double a = 2.0 * M_PI * k / 32.0;
-      const Eigen::Vector3d b = pose.R * Eigen::Vector3d(m.x() + layout.marker_radius_m * std::cos(a),
-                                                         m.y() + layout.marker_radius_m * std::sin(a), 0.0) + pose.t;
+      const Eigen::Vector3d b =
+          pose.R * Eigen::Vector3d(m.x() + layout.marker_radius_m * std::cos(a),
+                                   m.y() + layout.marker_radius_m * std::sin(a), 0.0) +
+          pose.t;
       const Eigen::Vector2d p = cam.Project(b);
       u0 = std::min(u0, p.x());
       u1 = std::max(u1, p.x());
@@ -85,7 +88,8 @@ RenderedFrame RenderTarget(const CameraModel& cam, const Pose3& pose, const Targ
           const double cosine = std::abs(n.dot(ray)) / ray.norm();
           const double lambda = d / n.dot(ray);
           const Eigen::Vector3d X = pose.R.transpose() * (lambda * ray - pose.t);
-          const double footprint = 2.0 * std::abs(lambda) * ray.norm() / (std::min(cam.fx, cam.fy) * std::max(cosine, 0.1));
+          const double footprint = 2.0 * std::abs(lambda) * ray.norm() /
+                                   (std::min(cam.fx, cam.fy) * std::max(cosine, 0.1));
           const double dist = (X.head<2>() - m).norm();
           if (dist > layout.marker_radius_m + footprint) continue;
           if (dist < layout.marker_radius_m - footprint) {
@@ -120,7 +124,9 @@ RenderedFrame RenderChessboard(const CameraModel& cam, const Pose3& pose, int co
   cv::Mat img(cam.height, cam.width, CV_64FC1, cv::Scalar(opt.background));
   RenderedFrame out;
   for (int r = 0; r < rows; ++r) {
-    for (int c = 0; c < cols; ++c) out.centres.push_back(cam.Project(pose.R * Eigen::Vector3d(c * pitch, r * pitch, 0) + pose.t));
+    for (int c = 0; c < cols; ++c)
+      out.centres.push_back(
+          cam.Project(pose.R * Eigen::Vector3d(c * pitch, r * pitch, 0) + pose.t));
   }
   const Eigen::Vector3d n = pose.R.col(2);
   const double d = n.dot(pose.t);
@@ -130,7 +136,8 @@ RenderedFrame RenderChessboard(const CameraModel& cam, const Pose3& pose, int co
       int dark = 0, hits = 0;
       for (int sy = 0; sy < s; ++sy) {
         for (int sx = 0; sx < s; ++sx) {
-          const Eigen::Vector2d nn = cam.PixelToNormalized({u - 0.5 + (sx + 0.5) / s, v - 0.5 + (sy + 0.5) / s});
+          const Eigen::Vector2d nn =
+              cam.PixelToNormalized({u - 0.5 + (sx + 0.5) / s, v - 0.5 + (sy + 0.5) / s});
           const Eigen::Vector3d ray(nn.x(), nn.y(), 1.0);
           const Eigen::Vector3d X = pose.R.transpose() * (d / n.dot(ray) * ray - pose.t);
           // Squares from -1 to cols (rows): a white margin around them.
@@ -140,7 +147,8 @@ RenderedFrame RenderChessboard(const CameraModel& cam, const Pose3& pose, int co
           if ((static_cast<int>(qx) + static_cast<int>(qy)) % 2 == 0) ++dark;
         }
       }
-      if (hits > 0) img.at<double>(v, u) = opt.background + (opt.foreground - opt.background) * dark / (s * s);
+      if (hits > 0)
+        img.at<double>(v, u) = opt.background + (opt.foreground - opt.background) * dark / (s * s);
     }
   }
   out.image = Finish(cam, img, opt, rng);

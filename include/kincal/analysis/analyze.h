@@ -35,11 +35,11 @@ class AnalysisError : public std::runtime_error {
 
 struct AnalyzeOptions {
   std::string model;
-  std::map<std::string, double> init;     // initial guesses by parameter name
-  std::string effects_mode = "auto";      // "auto", "none" or "list"
-  std::vector<std::string> effects;       // candidate specs when effects_mode == "list"
-  double fit_fraction = 0.7;              // first part of the time span used for fitting
-  double horizon_s = 1.0;                 // open-loop prediction horizon
+  std::map<std::string, double> init;  // initial guesses by parameter name
+  std::string effects_mode = "auto";   // "auto", "none" or "list"
+  std::vector<std::string> effects;    // candidate specs when effects_mode == "list"
+  double fit_fraction = 0.7;           // first part of the time span used for fitting
+  double horizon_s = 1.0;              // open-loop prediction horizon
   // Pose noise (position m, heading rad) weighting the residuals; estimated from the
   // data (second differences) when not given.
   std::optional<Eigen::Vector2d> pose_sigma;
@@ -75,7 +75,7 @@ struct FitReport {
   double cost = 0.0;  // sum of squared whitened residuals over the fit windows
   int fit_windows = 0;
   bool unique = true;
-  std::string uniqueness;                // explanation when not unique
+  std::string uniqueness;                 // explanation when not unique
   std::vector<std::string> unobservable;  // messages
 };
 
@@ -87,20 +87,20 @@ struct DiagnosisTerm {
 };
 
 struct ResidualTests {
-  double bias_z[3] = {0, 0, 0};       // mean / standard error (along, cross, heading)
+  double bias_z[3] = {0, 0, 0};  // mean / standard error (along, cross, heading)
   double lag1_autocorr[3] = {0, 0, 0};
   double ljung_box_p[3] = {1, 1, 1};  // whiteness over 10 lags (non-overlapping windows)
 };
 
 struct EffectTrial {
-  std::string name;   // effect spec
+  std::string name;  // effect spec
   int round = 0;
   bool accepted = false;
   std::vector<ParamEstimate> params;  // the effect's own parameters
-  double heldout_gain = 0.0;   // 1 - heldout pos RMS with / without
-  double combined_gain = 0.0;  // same for the noise-weighted position+heading error
+  double heldout_gain = 0.0;          // 1 - heldout pos RMS with / without
+  double combined_gain = 0.0;         // same for the noise-weighted position+heading error
   double delta_bic = 0.0;
-  double signature_z = 0.0;    // strength of its residual signature before the round
+  double signature_z = 0.0;  // strength of its residual signature before the round
   std::string evidence;
 };
 

@@ -20,7 +20,6 @@
 #include "kincal/time.h"
 
 namespace kincal {
-class model_check_t;  // generated from lcm/model_check_t.lcm
 
 struct ModelCheckOptions {
   double lookback_s = 0.3;   // command change measured over this interval before a pose
@@ -47,7 +46,10 @@ class ModelCheck {
   // the current state estimate (for heading and parameters) and the control history.
   void Add(TimeNs t_ns, const UpdateResult& update, const StateVec& state, const ControlSignal& u);
   ModelCheckVerdict Verdict() const;
-  void Reset() { count_ = 0; next_ = 0; }
+  void Reset() {
+    count_ = 0;
+    next_ = 0;
+  }
 
  private:
   enum Series { kAlong, kCross, kHeading, kDv, kDw, kW, kAbsW, kMoving, kNis, kNumSeries };
@@ -57,8 +59,5 @@ class ModelCheck {
   int count_ = 0;
   int next_ = 0;
 };
-
-// The verdict as the LCM message the daemon publishes (`utime`: us, host realtime clock).
-model_check_t ToMessage(const ModelCheckVerdict& v, const std::string& model, int64_t utime);
 
 }  // namespace kincal

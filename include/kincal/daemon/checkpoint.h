@@ -16,7 +16,7 @@ struct Checkpoint {
   std::string model;
   std::vector<std::string> effects;
   std::string filter;
-  int64_t utime = 0;          // of the last update, us, host realtime clock
+  int64_t utime = 0;  // of the last update, us, host realtime clock
   int64_t update_count = 0;
   std::vector<std::string> names, units;
   std::vector<double> values;

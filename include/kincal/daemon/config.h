@@ -9,9 +9,21 @@
 #include <string>
 #include <vector>
 
+#include "kincal/daemon/frame.h"
 #include "kincal/vision/markers.h"
 
 namespace kincal::daemon {
+
+// The choices a config makes, parsed once from their names (the names are what the YAML
+// files and messages use: SourceName(kV4l2) is "v4l2").
+enum class SourceKind { kSim, kV4l2, kLibcamera, kReplay };
+enum class PoseMethod { kGroundPlane, kLowe };  // ground_plane | lowe
+enum class ControlStamp { kReceive, kSender };  // receive | sender
+enum class FrameEncoding { kRaw, kPng };        // raw | png
+std::string_view SourceName(SourceKind k);
+std::string_view PoseMethodName(PoseMethod m);
+std::string_view ControlStampName(ControlStamp s);
+std::string_view FrameEncodingName(FrameEncoding e);
 
 struct LcmOptions {
   std::string url;  // empty: LCM's default (LCM_DEFAULT_URL or udpm://239.255.76.67:7667?ttl=0)
@@ -22,33 +34,38 @@ struct LcmOptions {
   std::string model_check_channel = "KINCAL_MODEL_CHECK";
   std::string markers_channel = "KINCAL_MARKERS";
   std::string frame_channel = "KINCAL_FRAME";
-  bool publish_frames = false;   // frames go to the log; on the network only if asked
+  bool publish_frames = false;  // frames go to the log; on the network only if asked
   bool publish_markers = true;
+  bool IsValid(std::string* error) const;
 };
 
 struct V4l2Options {
   std::string device = "/dev/video0";
   int width = 640, height = 480;
-  std::string pixel_format = "GREY";  // GREY, YUYV, MJPG
+  PixelFormat pixel_format = PixelFormat::kGrey;  // GREY, YUYV, MJPG
   double fps = 30.0;
   int buffers = 4;
-  std::map<std::string, long long> controls;  // V4L2 control name (lower case, '_' for ' ') -> value
+  std::map<std::string, long long>
+      controls;  // V4L2 control name (lower case, '_' for ' ') -> value
+  bool IsValid(std::string* error) const;
 };
 
 struct LibcameraOptions {
-  std::string camera;                // id; empty: the first camera
+  std::string camera;  // id; empty: the first camera
   int width = 640, height = 480;
-  std::string pixel_format = "GREY";  // GREY (R8), YUYV, MJPG, BGR3 (RGB888), RGB3 (BGR888)
+  // GREY (R8), YUYV, MJPG, BGR3 (RGB888), RGB3 (BGR888)
+  PixelFormat pixel_format = PixelFormat::kGrey;
   int buffers = 4;
+  bool IsValid(std::string* error) const;
 };
 
 struct SimOptions {
   std::string scenario = "sim_diffdrive.yaml";  // robot, truth, controls (as `kincal simulate`)
-  double speed = 1.0;        // simulated seconds per wall-clock second; <= 0: as fast as possible
-  double duration_s = 0.0;   // 0: the scenario's
-  double margin_px = 40.0;   // a run ends when the target comes this close to the image edge
-  double carry_s = 1.0;      // the robot is carried back to the centre (no target in view)
-  double noise_grey = 2.0;   // image noise, grey levels
+  double speed = 1.0;       // simulated seconds per wall-clock second; <= 0: as fast as possible
+  double duration_s = 0.0;  // 0: the scenario's
+  double margin_px = 40.0;  // a run ends when the target comes this close to the image edge
+  double carry_s = 1.0;     // the robot is carried back to the centre (no target in view)
+  double noise_grey = 2.0;  // image noise, grey levels
   // false: the simulated robot hands its controls to the filter directly (and publishes
   // them); true: they reach the filter only through LCM, like a real robot's.
   bool controls_via_lcm = false;
@@ -57,29 +74,35 @@ struct SimOptions {
   double reflection_prob = 0.0;
   double occlusion_prob = 0.0;
   uint64_t seed = 0;  // 0: the scenario's seed
+  bool IsValid(std::string* error) const;
 };
 
 struct ReplayOptions {
   std::string path;
   double speed = 1.0;  // 0: --fast (as fast as possible, nothing dropped, deterministic)
   int loops = 1;       // play the log this many times, each later by the log's span (soak tests)
+  bool IsValid(std::string* error) const;
 };
 
 struct CameraOptions {
-  std::string intrinsics;      // OpenCV camera YAML; empty: 640x480, f = 500 px (simulation)
-  std::string floor;           // floor extrinsics from `kincal floorcal`; empty: nadir camera
+  std::string intrinsics;       // OpenCV camera YAML; empty: 640x480, f = 500 px (simulation)
+  std::string floor;            // floor extrinsics from `kincal floorcal`; empty: nadir camera
   double nadir_height_m = 2.0;  // used when `floor` is empty
+  bool IsValid(std::string* error) const;
 };
 
 struct TargetOptions {
-  std::string layout;       // target YAML; empty: the thesis plate
-  double height_m = 0.05;   // target plane above the floor
+  std::string layout;      // target YAML; empty: the thesis plate
+  double height_m = 0.05;  // target plane above the floor
+  bool IsValid(std::string* error) const;
 };
 
 struct PoseOptions {
-  std::string method = "ground_plane";  // ground_plane (x, y, theta) | lowe (6-DoF, then onto the floor)
-  double sigma_px = 0.05;     // marker centre noise, px
-  double max_rms_px = 2.0;    // poses fitting worse are published invalid
+  // ground_plane (x, y, theta) | lowe (6-DoF, then onto the floor)
+  PoseMethod method = PoseMethod::kGroundPlane;
+  double sigma_px = 0.05;   // marker centre noise, px
+  double max_rms_px = 2.0;  // poses fitting worse are published invalid
+  bool IsValid(std::string* error) const;
 };
 
 struct RobotOptions {
@@ -87,20 +110,22 @@ struct RobotOptions {
   std::vector<std::string> effects;
   std::map<std::string, double> guess;  // initial parameter values (default: model defaults)
   double guess_sigma_fraction = 0.2;
-  std::string control_stamp = "receive";  // receive | sender
+  ControlStamp control_stamp = ControlStamp::kReceive;
   double max_control_delay_s = 0.1;  // a pose waits this long for the controls up to its time
+  bool IsValid(std::string* error) const;
 };
 
 struct FilterOptions {
-  std::string type = "dd2";  // dd2 | ekf | ukf
+  std::string type = "dd2";         // dd2 | ekf | ukf
   std::vector<double> control_psd;  // per control channel; empty: zeros
   std::array<double, 3> pose_psd{0.0, 0.0, 0.0};
-  double max_pose_gap_s = 1.0;   // a longer gap starts a new run (pose reset)
-  double params_rate_hz = 10.0;  // params_t publish rate (0: every update)
+  double max_pose_gap_s = 1.0;      // a longer gap starts a new run (pose reset)
+  double params_rate_hz = 10.0;     // params_t publish rate (0: every update)
   double control_history_s = 10.0;  // control samples kept behind the filter
-  double gate_nis = 16.27;       // innovation gate (chi^2, 3 dof, 99.9 %); 0: off
-  int divergence_gated = 10;     // this many gated poses in a row: diverged, re-fit by batch
-  double batch_window_s = 8.0;   // poses (and controls) the re-fit uses; <= control_history_s
+  double gate_nis = 16.27;          // innovation gate (chi^2, 3 dof, 99.9 %); 0: off
+  int divergence_gated = 10;        // this many gated poses in a row: diverged, re-fit by batch
+  double batch_window_s = 8.0;      // poses (and controls) the re-fit uses; <= control_history_s
+  bool IsValid(std::string* error) const;
 };
 
 struct QueueOptions {
@@ -108,23 +133,26 @@ struct QueueOptions {
   int poses = 64;       // detection -> filter (live: drop oldest; --fast: block)
   int controls = 1024;  // LCM -> filter (live: drop oldest; --fast: block)
   int recorder = 4096;  // everything -> log writer (live: drop newest, counted as lost)
+  bool IsValid(std::string* error) const;
 };
 
 struct RecordOptions {
-  std::string path;                 // empty: no recording
-  std::string frame_encoding = "raw";  // raw | png
+  std::string path;  // empty: no recording
+  FrameEncoding frame_encoding = FrameEncoding::kRaw;
   double flush_every_s = 1.0;
+  bool IsValid(std::string* error) const;
 };
 
 struct CheckpointOptions {
-  std::string path;      // empty: none
+  std::string path;  // empty: none
   double every_s = 10.0;
-  std::string resume;    // checkpoint to start from (--resume)
+  std::string resume;  // checkpoint to start from (--resume)
+  bool IsValid(std::string* error) const;
 };
 
 struct DaemonConfig {
-  std::string file;        // where it was read from ("" for defaults)
-  std::string source = "sim";  // sim | v4l2 | libcamera | replay
+  std::string file;  // where it was read from ("" for defaults)
+  SourceKind source = SourceKind::kSim;
   LcmOptions lcm;
   V4l2Options v4l2;
   LibcameraOptions libcamera;
@@ -140,11 +168,14 @@ struct DaemonConfig {
   RecordOptions record;
   CheckpointOptions checkpoint;
   double health_rate_hz = 1.0;
+  // Every section, then what ties sections together; false with *error naming the
+  // section.key and what is expected. Only the sections the source uses are checked.
+  bool IsValid(std::string* error) const;
 };
 
 // Throws std::runtime_error naming file:line and the offending key.
 DaemonConfig LoadDaemonConfig(const std::string& path);
-// Throws std::runtime_error naming the section.key and what is expected.
+// Throws std::runtime_error("config: " + the IsValid error).
 void Validate(const DaemonConfig& c);
 
 }  // namespace kincal::daemon

@@ -19,29 +19,38 @@
 
 namespace kincal::daemon {
 
+// Every counter kincald keeps, listed once: X(name, meaning). Each is a field of
+// DaemonCounters, of the pipeline's atomic counter set, and of kincal.health_t (lcm/health_t.lcm
+// has a field of the same name for each; the health message is filled from this list).
+#define KINCAL_DAEMON_COUNTERS(X)                                                          \
+  X(frames_captured, "frames the source delivered")                                        \
+  X(frames_dropped_device, "frames the device lost (sequence gaps)")                       \
+  X(frames_dropped_queue, "frames dropped by the full frame queue (live)")                 \
+  X(frames_bad, "undecodable or wrong-sized frames, damaged log stretches")                \
+  X(frames_out_of_order, "pose time repeated or earlier than the last: not used")          \
+  X(poses_valid, "frames that gave a pose")                                                \
+  X(poses_invalid, "frames without the target")                                            \
+  X(poses_published, "pose_t messages published")                                          \
+  X(poses_dropped_queue, "poses dropped by the full pose queue (live)")                    \
+  X(poses_gated, "poses that failed the innovation gate: not used")                        \
+  X(updates, "filter updates")                                                             \
+  X(run_resets, "new runs: a gap between poses longer than filter.max_pose_gap_s")         \
+  X(filter_resets, "divergence: the filter restarted from a batch fit")                    \
+  X(time_resets, "a clock jumped back: new time base, parameters kept")                    \
+  X(discarded_at_reset, "poses and controls still on the old time base after one")         \
+  X(source_restarts, "the device failed and was reopened")                                 \
+  X(controls_received, "control messages accepted")                                        \
+  X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)") \
+  X(controls_out_of_order, "controls older than the newest one: ignored")                  \
+  X(controls_late, "controls older than the filter's time: applied from then on")          \
+  X(controls_dropped_queue, "controls dropped by the full control queue (live)")           \
+  X(log_events_written, "events written to the --record log")                              \
+  X(log_events_lost, "events the recorder dropped (live, its queue full)")
+
 struct DaemonCounters {
-  int64_t frames_captured = 0;
-  int64_t frames_dropped_device = 0;
-  int64_t frames_dropped_queue = 0;
-  int64_t frame_errors = 0;
-  int64_t poses_valid = 0;
-  int64_t poses_invalid = 0;
-  int64_t poses_dropped_queue = 0;
-  int64_t frames_out_of_order = 0;  // pose time repeated or earlier than the last: not used
-  int64_t poses_gated = 0;          // innovation too large: not used
-  int64_t filter_resets = 0;        // divergence: restarted from a batch fit
-  int64_t time_resets = 0;          // a clock jumped back: new time base
-  int64_t discarded_at_reset = 0;   // poses/controls still on the old time base after one
-  int64_t source_restarts = 0;      // the device failed and was reopened
-  int64_t controls_late = 0;        // older than the filter's time
-  int64_t updates = 0;
-  int64_t run_resets = 0;
-  int64_t controls_received = 0;
-  int64_t controls_rejected = 0;    // undecodable, wrong model, not finite
-  int64_t controls_out_of_order = 0;
-  int64_t controls_dropped_queue = 0;
-  int64_t log_events_written = 0;
-  int64_t log_events_lost = 0;
+#define KINCAL_COUNTER_FIELD(name, meaning) int64_t name = 0;
+  KINCAL_DAEMON_COUNTERS(KINCAL_COUNTER_FIELD)
+#undef KINCAL_COUNTER_FIELD
   double latency_p50_ms = 0, latency_p99_ms = 0, latency_max_ms = 0;  // whole run
 };
 
@@ -65,6 +74,7 @@ class Daemon {
   DaemonCounters counters() const;
 
  private:
+  static void LogSummary(const DaemonCounters& c);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -21,6 +21,11 @@
 
 namespace kincal::daemon {
 
+// The pipeline's time base from a recorded realtime stamp, and back (exact both ways for
+// the stamps the pipeline makes).
+inline constexpr TimeNs UtimeToPipelineNs(int64_t utime) { return utime * 1000; }
+inline constexpr int64_t PipelineNsToUtime(TimeNs t_ns) { return t_ns / 1000; }
+
 // Packed 24-bit colour: kBgr24 stores bytes B, G, R (V4L2 BGR3, libcamera RGB888);
 // kRgb24 stores R, G, B (V4L2 RGB3, libcamera BGR888).
 enum class PixelFormat { kGrey, kYuyv, kMjpeg, kPng, kBgr24, kRgb24 };
@@ -29,13 +34,13 @@ std::string_view PixelFormatName(PixelFormat f);  // "GREY", "YUYV", "MJPG", "PN
 PixelFormat ParsePixelFormat(std::string_view name);
 
 struct Frame {
-  std::vector<uint8_t> data;  // capacity is kept when a Frame is reused
+  std::vector<uint8_t> data;              // capacity is kept when a Frame is reused
   int width = 0, height = 0, stride = 0;  // stride: bytes per row (raw formats)
   PixelFormat format = PixelFormat::kGrey;
-  int64_t utime = 0;          // exposure start, us, host realtime clock
-  int64_t device_utime = 0;   // source's own stamp, us (0 if none)
-  int64_t sequence = 0;       // source sequence number (gaps: dropped frames)
-  TimeNs arrival_mono_ns = 0; // when the source handed the frame over (latency start)
+  int64_t utime = 0;                 // exposure start, us, host realtime clock
+  int64_t device_utime = 0;          // source's own stamp, us (0 if none)
+  int64_t sequence = 0;              // source sequence number (gaps: dropped frames)
+  TimeNs arrival_mono_ns = 0;        // when the source handed the frame over (latency start)
   bool tstamp_end_of_frame = false;  // V4L2: the device stamped the end, not the start
 };
 
@@ -60,7 +65,7 @@ struct ControlSample {
 inline constexpr int kMaxMarkers = 16;
 
 struct PoseSample {
-  int64_t utime = 0;          // of the frame (exposure start)
+  int64_t utime = 0;  // of the frame (exposure start)
   int64_t device_utime = 0;
   int64_t sequence = 0;
   TimeNs arrival_mono_ns = 0;
@@ -68,12 +73,21 @@ struct PoseSample {
   Eigen::Vector3d xytheta = Eigen::Vector3d::Zero();  // floor frame (m, m, rad)
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
   double rms_px = 0.0;
-  int num_markers = 0;        // detected (identified or not)
+  int num_markers = 0;  // detected (identified or not)
   std::array<double, kMaxMarkers> u{}, v{};
   std::array<int, kMaxMarkers> id{};
 };
 
 enum class SourceStatus { kFrame, kTimeout, kEnd, kError };
+
+// What a source can do, declared by the source itself; the daemon wires itself from this.
+struct SourceCapabilities {
+  bool lossless = false;                  // every frame must be processed (queues block): --fast
+  bool carries_controls = false;          // the source hands the robot's controls over itself
+  bool controls_end_with_frames = false;  // the robot is simulated or recorded: its controls
+                                          // stop when the frames do
+  bool can_reopen = false;                // a device that can be opened again after an error
+};
 
 // Something that supplies frames. Start() may throw SourceError with a message naming
 // the device and what failed; Next() reports errors through `error`.
@@ -100,8 +114,7 @@ class FrameSource {
   virtual int64_t device_drops() const { return 0; }
   // Input the source could not use (undecodable log events).
   virtual int64_t rejected() const { return 0; }
-  // True for log replay in --fast mode: every frame must be processed (queues block).
-  virtual bool lossless() const { return false; }
+  virtual SourceCapabilities capabilities() const = 0;
 };
 
 }  // namespace kincal::daemon

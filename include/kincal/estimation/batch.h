@@ -28,10 +28,10 @@
 namespace kincal {
 
 struct PoseMeasurement {
-  TimeNs t_ns = 0;                               // recording time base
-  Eigen::Vector3d z = Eigen::Vector3d::Zero();   // measured target pose (m, m, rad)
+  TimeNs t_ns = 0;                                  // recording time base
+  Eigen::Vector3d z = Eigen::Vector3d::Zero();      // measured target pose (m, m, rad)
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // its covariance
-  int segment = 0;                               // shooting segment id (non-decreasing)
+  int segment = 0;                                  // shooting segment id (non-decreasing)
 };
 
 struct ParamPrior {
@@ -57,8 +57,8 @@ struct BatchOptions {
 };
 
 struct BatchResult {
-  Eigen::VectorXd params;          // estimate over all System params
-  Eigen::MatrixXd covariance;      // their covariance (empty if not computed / singular)
+  Eigen::VectorXd params;      // estimate over all System params
+  Eigen::MatrixXd covariance;  // their covariance (empty if not computed / singular)
   std::vector<Eigen::Vector3d> segment_start;  // reference pose at each segment start
   std::vector<TimeNs> segment_start_ns;
   // With profiled_covariance: information over the params (whitened units), H^-1, and

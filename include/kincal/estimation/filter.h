@@ -82,6 +82,6 @@ void Triangularize(const CompoundMat& A, StateMat* L);
 }  // namespace kincal
 
 // Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_FILTER(Class, Name)                                             \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::FilterRegistry::Instance().Register(       \
+#define KINCAL_REGISTER_FILTER(Class, Name)                                                        \
+  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::FilterRegistry::Instance().Register( \
       Name, [] { return std::make_unique<Class>(); });

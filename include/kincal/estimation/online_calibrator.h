@@ -74,8 +74,7 @@ NoiseMat ProcessNoiseSqrt(const System& sys, const ProcessNoiseOptions& noise, d
 class OnlineCalibrator {
  public:
   // Throws std::invalid_argument if the options are not valid for the system.
-  OnlineCalibrator(const System& sys, OnlineCalibratorOptions options,
-                   TimeNs time_origin_ns = 0);
+  OnlineCalibrator(const System& sys, OnlineCalibratorOptions options, TimeNs time_origin_ns = 0);
 
   const System& system() const { return sys_; }
   ControlSignal& controls() { return controls_; }

@@ -15,7 +15,6 @@
 #include <vector>
 
 #include "kincal/control_signal.h"
-#include "kincal/estimation/batch.h"
 #include "kincal/model.h"
 
 namespace kincal {
@@ -26,7 +25,7 @@ class RecordingError : public std::runtime_error {
 };
 
 struct PoseSample {
-  TimeNs t_ns = 0;  // recording time base
+  TimeNs t_ns = 0;                              // recording time base
   Eigen::Vector3d z = Eigen::Vector3d::Zero();  // x (m), y (m), theta (rad)
 };
 
@@ -39,9 +38,9 @@ struct RecordingStats {
 };
 
 struct Recording {
-  std::string source;        // human-readable origin ("file.csv + file.csv", "MR.CLAM robot 3")
-  double origin_s = 0.0;     // file time of t_ns = 0
-  ControlSignal controls;    // commanded controls, model's channel order
+  std::string source;      // human-readable origin ("file.csv + file.csv", "MR.CLAM robot 3")
+  double origin_s = 0.0;   // file time of t_ns = 0
+  ControlSignal controls;  // commanded controls, model's channel order
   std::vector<PoseSample> poses;  // sorted by time, unique times
   RecordingStats stats;
   std::vector<std::string> warnings;  // suspicious but readable input

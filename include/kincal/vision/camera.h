@@ -12,7 +12,7 @@
 namespace kincal::vision {
 
 struct CameraModel {
-  int width = 0, height = 0;         // px
+  int width = 0, height = 0;              // px
   double fx = 0, fy = 0, cx = 0, cy = 0;  // px
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
 

@@ -19,7 +19,7 @@ namespace kincal::vision {
 
 struct DetectorOptions {
   bool dark_on_light = true;
-  int threshold = -1;            // grey level; -1: Otsu within the search region
+  int threshold = -1;  // grey level; -1: Otsu within the search region
   int min_area_px = 12;
   int max_area_px = 40000;
   double min_circularity = 0.6;  // minor/major axis ratio of the blob's ellipse
@@ -32,7 +32,7 @@ struct Marker {
   Eigen::Vector2d centre_px;  // intensity-weighted centre (distorted image), px
   double area_px = 0.0;
   double diameter_px = 0.0;
-  int id = -1;                // index in the target layout once identified
+  int id = -1;  // index in the target layout once identified
 };
 
 struct Rejected {
@@ -46,10 +46,10 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
 
 // Assigns layout ids: among the detections, the set of layout.markers.size() markers and
 // the correspondence whose affine fit (in undistorted normalised coordinates, handedness
-// kept) leaves the smallest residual. Returns false when no assignment fits within `max_rms` (relative
-// to the target's size in the image).
-bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout, std::vector<Marker>* markers,
-                    double max_rms = 0.05);
+// kept) leaves the smallest residual. Returns false when no assignment fits within `max_rms`
+// (relative to the target's size in the image).
+bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout,
+                    std::vector<Marker>* markers, double max_rms = 0.05);
 
 // Several targets (several robots) in one view, told apart by their layouts: each layout
 // in turn takes the best-fitting unassigned detections. Returns, per layout, its markers

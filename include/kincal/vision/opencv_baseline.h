@@ -29,9 +29,11 @@ inline OpenCvCalibration CalibrateWithOpenCv(const std::vector<CalibrationView>&
     const double z0 = v.object.empty() ? 0.0 : v.object.front().z();
     for (size_t k = 0; k < v.object.size(); ++k) {
       planar = planar && v.object[k].z() == z0;
-      obj.back().emplace_back(static_cast<float>(v.object[k].x()), static_cast<float>(v.object[k].y()),
+      obj.back().emplace_back(static_cast<float>(v.object[k].x()),
+                              static_cast<float>(v.object[k].y()),
                               static_cast<float>(v.object[k].z() - z0));
-      img.back().emplace_back(static_cast<float>(v.image[k].x()), static_cast<float>(v.image[k].y()));
+      img.back().emplace_back(static_cast<float>(v.image[k].x()),
+                              static_cast<float>(v.image[k].y()));
     }
   }
   cv::Mat K = (cv::Mat_<double>(3, 3) << guess.fx, 0, guess.cx, 0, guess.fy, guess.cy, 0, 0, 1);

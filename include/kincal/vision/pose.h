@@ -24,8 +24,8 @@
 namespace kincal::vision {
 
 struct LoweResult {
-  Pose3 pose;                                      // target -> camera
-  Eigen::Matrix<double, 6, 6> covariance;          // over (D, rotation increment)
+  Pose3 pose;                              // target -> camera
+  Eigen::Matrix<double, 6, 6> covariance;  // over (D, rotation increment)
   double rms_px = 0.0;
   int iterations = 0;
   bool ok = false;

@@ -35,16 +35,16 @@ struct Pose3 {
 };
 
 struct RenderOptions {
-  int supersample = 8;          // sub-samples per pixel and axis on marker edges
-  double background = 200.0;    // grey level of the plate / floor
-  double foreground = 40.0;     // grey level of a marker
-  double blur_sigma_px = 0.6;   // optical blur
-  double noise_sigma = 1.0;     // additive Gaussian noise, grey levels
-  double vignetting = 0.0;      // relative brightness loss at the image corner
+  int supersample = 8;         // sub-samples per pixel and axis on marker edges
+  double background = 200.0;   // grey level of the plate / floor
+  double foreground = 40.0;    // grey level of a marker
+  double blur_sigma_px = 0.6;  // optical blur
+  double noise_sigma = 1.0;    // additive Gaussian noise, grey levels
+  double vignetting = 0.0;     // relative brightness loss at the image corner
 };
 
 struct RenderedFrame {
-  cv::Mat image;                        // CV_8UC1
+  cv::Mat image;                         // CV_8UC1
   std::vector<Eigen::Vector2d> centres;  // projected marker centres (ground truth), px
 };
 

@@ -16,7 +16,7 @@
 #include <thread>
 #include <vector>
 
-#include "kincal/daemon/bounded_queue.h"
+#include "daemon/bounded_queue.h"
 
 namespace kincal::daemon {
 

@@ -8,9 +8,9 @@
 #include <array>
 #include <string>
 
+#include "daemon/sources.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/sources.h"
 #include "kincal/vision/markers.h"
 
 namespace kincal::daemon {

@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <string>
 
-namespace kincal::daemon {
+namespace kincal {
 
 // kincal.controls_t: at most `max_controls` entries that fit in `n` bytes.
 bool PlausibleControls(const void* data, size_t n, int max_controls, std::string* why);
@@ -17,4 +17,4 @@ bool PlausibleParams(const void* data, size_t n, int max_params, std::string* wh
 // kincal.frame_t: `size` equal to the bytes that remain.
 bool PlausibleFrame(const void* data, size_t n, std::string* why);
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -1,11 +1,11 @@
 // Length-field checks for LCM messages from outside (see lcm_guard.h). Offsets follow the
 // LCM wire format: an 8-byte type hash, then the fields in order, big-endian; a string is
 // a 4-byte length (including the terminating NUL) and its bytes.
-#include "kincal/daemon/lcm_guard.h"
+#include "kincal/io/lcm_guard.h"
 
 #include <cstdint>
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
 class Reader {
@@ -46,12 +46,14 @@ bool PlausibleControls(const void* data, size_t n, int max_controls, std::string
     return false;
   }
   if (count < 0 || count > max_controls) {
-    *why = "num_controls " + std::to_string(count) + " outside [0, " + std::to_string(max_controls) + "]";
+    *why = "num_controls " + std::to_string(count) + " outside [0, " +
+           std::to_string(max_controls) + "]";
     return false;
   }
   // each control: a name (>= 5 bytes) and a double (8 bytes)
   if (static_cast<size_t>(count) * 13 > r.remaining()) {
-    *why = "num_controls " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
+    *why = "num_controls " + std::to_string(count) + " does not fit in " + std::to_string(n) +
+           " bytes";
     return false;
   }
   // Every string must have a length >= 1 (lcm-gen's decoder subtracts the NUL from it).
@@ -77,19 +79,22 @@ bool PlausibleParams(const void* data, size_t n, int max_params, std::string* wh
     return false;
   }
   if (count < 0 || count > max_params) {
-    *why = "num_params " + std::to_string(count) + " outside [0, " + std::to_string(max_params) + "]";
+    *why =
+        "num_params " + std::to_string(count) + " outside [0, " + std::to_string(max_params) + "]";
     return false;
   }
   // each parameter: name and unit (>= 5 bytes each), value and sigma (8 each), a row of
   // the covariance (8 * count)
   const size_t need = static_cast<size_t>(count) * (5 + 5 + 8 + 8 + 8 * static_cast<size_t>(count));
   if (need > r.remaining()) {
-    *why = "num_params " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
+    *why =
+        "num_params " + std::to_string(count) + " does not fit in " + std::to_string(n) + " bytes";
     return false;
   }
   for (int64_t i = 0; i < 2 * count; ++i) {  // names, then units
     if (!r.String()) {
-      *why = "params_t.names/units[" + std::to_string(i % std::max<int64_t>(count, 1)) + "] is malformed";
+      *why = "params_t.names/units[" + std::to_string(i % std::max<int64_t>(count, 1)) +
+             "] is malformed";
       return false;
     }
   }
@@ -105,10 +110,11 @@ bool PlausibleFrame(const void* data, size_t n, std::string* why) {
     return false;
   }
   if (size < 0 || static_cast<size_t>(size) != r.remaining()) {
-    *why = "frame_t.size " + std::to_string(size) + " but " + std::to_string(r.remaining()) + " data bytes";
+    *why = "frame_t.size " + std::to_string(size) + " but " + std::to_string(r.remaining()) +
+           " data bytes";
     return false;
   }
   return true;
 }
 
-}  // namespace kincal::daemon
+}  // namespace kincal

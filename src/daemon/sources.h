@@ -41,6 +41,11 @@ std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o);
 // libcamera camera.
 std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
 
+// The source the config names (source: sim | v4l2 | libcamera | replay). `controls` and
+// `publish` are used by the sources that carry the robot's controls (sim, replay).
+std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
+                                        ControlIntake controls, NetworkPublish publish);
+
 // Host realtime clock in microseconds, and CLOCK_MONOTONIC in nanoseconds.
 int64_t RealtimeUtime();
 TimeNs MonotonicNs();

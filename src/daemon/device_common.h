@@ -1,0 +1,47 @@
+// What the device sources (V4L2, libcamera) share: counting the frames a device lost from
+// gaps in its sequence numbers, and reopening after a failure.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include "kincal/daemon/frame.h"
+
+namespace kincal::daemon {
+
+// Frames lost by a device, from gaps in the sequence numbers of the frames it delivered.
+// Observe() on the capture thread; drops() from any thread.
+class SequenceGaps {
+ public:
+  void Observe(uint32_t sequence) {
+    if (have_last_ && sequence > last_ + 1) drops_.fetch_add(sequence - last_ - 1);
+    last_ = sequence;
+    have_last_ = true;
+  }
+  // A reopened device numbers its frames anew.
+  void Restart() { have_last_ = false; }
+  int64_t drops() const { return drops_.load(); }
+
+ private:
+  std::atomic<int64_t> drops_{0};
+  uint32_t last_ = 0;
+  bool have_last_ = false;
+};
+
+// Closes a device and starts it again; false with the reason in *error when it is still
+// not there (`start` throws SourceError naming the device and what failed).
+inline bool ReopenDevice(const std::function<void()>& close, const std::function<void()>& start,
+                         std::string* error) {
+  close();
+  try {
+    start();
+    return true;
+  } catch (const SourceError& e) {
+    *error = e.what();
+    return false;
+  }
+}
+
+}  // namespace kincal::daemon

@@ -1,0 +1,112 @@
+// The filter stage of kincald: poses and controls in, parameter estimates out. It owns the
+// online calibrator, the model check, the time base and the divergence recovery; the
+// filter thread only decides when a pose may be taken (its controls are in) and hands it
+// over. Single-threaded; times are the pipeline's (ns), converted from the samples' utime
+// once, on entry.
+//
+//   AddControl  a control sample (time base rules, held jumps, late and reordered ones)
+//   AddPose     a pose: initialise, new run, update or gate, recovery, publish
+//   Recover     after filter.divergence_gated gated poses in a row: batch re-fit, restart
+//   Finish      the final estimate and checkpoint
+#pragma once
+
+#include <functional>
+#include <kincal/params_t.hpp>
+#include <memory>
+#include <string>
+
+#include "daemon/counters.h"
+#include "daemon/pose_ring.h"
+#include "daemon/time_base.h"
+#include "kincal/analysis/model_check.h"
+#include "kincal/daemon/checkpoint.h"
+#include "kincal/daemon/config.h"
+#include "kincal/daemon/frame.h"
+#include "kincal/estimation/online_calibrator.h"
+#include "kincal/system.h"
+
+namespace kincal {
+class model_check_t;
+}
+
+namespace kincal::daemon {
+
+// What the stage starts from: parameters and their covariance (the configured guess, or a
+// checkpoint resumed).
+struct FilterPrior {
+  VecN<kMaxState> mean;
+  StateMat covariance;
+};
+// The configured guess, with robot.guess_sigma_fraction of each value (or of the
+// parameter's default sigma, whichever is larger) as its sigma.
+FilterPrior ConfiguredPrior(const System& sys, const DaemonConfig& c);
+// Replaces the prior's parameters that a checkpoint has (matched by name; the others keep
+// the configured prior). Returns how many matched.
+int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior);
+
+// Where the stage's results go (called on the filter thread).
+struct FilterOutputs {
+  std::function<void(int64_t utime, const kincal::params_t&)> params;
+  std::function<void(int64_t utime, const kincal::model_check_t&)> model_check;
+  std::function<void(const Checkpoint&)> estimate;  // after every params publication
+  std::function<void()> checkpoint_due;             // every checkpoint.every_s (if a path is set)
+};
+
+class FilterStage {
+ public:
+  // `next_control` pops the next queued control (false when none is waiting); the stage
+  // drains it itself, because a clock jump must take exactly the controls queued behind it.
+  FilterStage(const System& sys, const DaemonConfig& c, FilterPrior prior,
+              std::function<bool(ControlSample*)> next_control, FilterOutputs outputs,
+              CounterSet* counters);
+  ~FilterStage();
+
+  // Takes every queued control until one starts a clock jump (held, see TimeBase).
+  void DrainControls(TimeNs now_mono_ns);
+  // One pose (in time order; invalid poses are ignored).
+  void AddPose(const PoseSample& p, TimeNs now_mono_ns);
+  // The controls jumped back and the poses did not follow: the held control starts the new
+  // base by itself.
+  void TakeControlJump(TimeNs now_mono_ns);
+  // Publishes the final estimate (and writes the checkpoint) if the filter has started.
+  void Finish();
+
+  // The controls up to the pose's time are in, or will never come (a jump is held).
+  bool ControlsCover(const PoseSample& p) const {
+    return time_base_.newest_control_ns() >= UtimeToPipelineNs(p.utime) || time_base_.holding();
+  }
+  bool holding_jump() const { return time_base_.holding(); }
+  TimeNs held_since_mono_ns() const { return time_base_.held_since_mono_ns(); }
+
+ private:
+  void AddControlSample(const ControlSample& c);
+  void TakeJump(const char* what, TimeNs t, TimeBase::Stream by, TimeNs now_mono_ns);
+  void StartNewBase(const char* what, TimeNs t, TimeBase::Stream by);
+  void Update(const PoseSample& p, TimeNs t);
+  void Recover(const PoseSample& p, TimeNs t);
+  void PublishParams(TimeNs t, bool force);
+  void PublishModelCheck(TimeNs t);
+  int ParamsStatus(bool converged) const;
+
+  const System& sys_;
+  const DaemonConfig& cfg_;
+  FilterPrior prior_;
+  Eigen::VectorXd prior_sigma_;  // of the configured or resumed prior (convergence test)
+  OnlineCalibratorOptions calibrator_options_;
+  std::function<bool(ControlSample*)> next_control_;
+  FilterOutputs out_;
+  CounterSet& counters_;
+
+  TimeNs max_gap_ns_, params_every_ns_, check_every_ns_, checkpoint_every_ns_, batch_window_ns_;
+  TimeBase time_base_;
+  std::unique_ptr<OnlineCalibrator> cal_;
+  std::unique_ptr<ModelCheck> check_;
+  PoseRing recent_;  // poses the filter used, for a batch re-fit when it diverges
+  int consecutive_gated_ = 0;
+  TimeNs last_params_ns_ = TimeBase::kNever, last_check_ns_ = TimeBase::kNever;
+  TimeNs last_checkpoint_ns_ = 0;
+  kincal::params_t params_msg_{};
+  Checkpoint estimate_;
+};
+
+}  // namespace kincal::daemon

@@ -1,0 +1,64 @@
+#include "daemon/health.h"
+
+#include "daemon/messages.h"
+
+namespace kincal::daemon {
+namespace {
+
+class Problems {
+ public:
+  void Add(const std::string& what) { text_ += (text_.empty() ? "" : "; ") + what; }
+  const std::string& text() const { return text_; }
+
+ private:
+  std::string text_;
+};
+
+}  // namespace
+
+void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
+                           int64_t utime, kincal::health_t* h) {
+  *h = kincal::health_t{};
+  h->schema_version = 3;
+  h->utime = utime;
+  h->source = s.source_name;
+  h->frame_rate_hz = static_cast<double>(now.frames_captured - prev_.frames_captured) / period_s;
+  FillHealthCounters(now, h);
+  h->latency_p50_ms = s.latency_p50_ms;
+  h->latency_p99_ms = s.latency_p99_ms;
+
+  Problems p;
+  if (!s.source_error.empty()) p.Add("source: " + s.source_error);
+  if (now.frames_bad > prev_.frames_bad) p.Add("bad frames: " + s.last_frame_error);
+  if (!s.source_done && s.since_last_frame_ns > kNoFramesNs) p.Add("no frames for 2 s");
+  if (now.frames_dropped_queue > prev_.frames_dropped_queue) {
+    p.Add("frame queue full: detection is too slow");
+  }
+  if (now.poses_dropped_queue > prev_.poses_dropped_queue) {
+    p.Add("pose queue full: the filter is too slow");
+  }
+  if (now.controls_dropped_queue > prev_.controls_dropped_queue) {
+    p.Add("control queue full: the filter is too slow");
+  }
+  if (now.frames_dropped_device > prev_.frames_dropped_device) p.Add("the device dropped frames");
+  if (now.log_events_lost > prev_.log_events_lost) p.Add("log events lost");
+  if (now.filter_resets > prev_.filter_resets) {
+    p.Add("filter diverged and was restarted from a batch fit");
+  }
+  if (now.time_resets > prev_.time_resets) p.Add("a clock jumped back: new time base");
+  if (now.frames_out_of_order > prev_.frames_out_of_order) {
+    p.Add("frames with repeated or earlier timestamps");
+  }
+  if (now.messages_rejected > prev_.messages_rejected) {
+    p.Add("rejected control messages (last: " + s.last_reject + ")");
+  }
+  if (!s.recorder_error.empty()) p.Add(s.recorder_error);
+  if (s.expects_lcm_controls && now.controls_received == 0 && now.frames_captured > 0) {
+    p.Add("no controls received on " + s.controls_channel);
+  }
+  h->ok = p.text().empty() ? 1 : 0;
+  h->message = p.text();
+  prev_ = now;
+}
+
+}  // namespace kincal::daemon

@@ -1,0 +1,40 @@
+// kincald's health message: the counters, whole, and a one-line account of what is wrong
+// now (what changed since the last message, and standing conditions such as no frames).
+#pragma once
+
+#include <kincal/health_t.hpp>
+#include <string>
+
+#include "kincal/daemon/daemon.h"
+#include "kincal/time.h"
+
+namespace kincal::daemon {
+
+// What the pipeline reports beside its counters (copied under the pipeline's status lock).
+struct HealthStatus {
+  std::string source_name;
+  std::string source_error;      // the source's current failure ("" when none)
+  std::string last_frame_error;  // the newest frame the pose stage could not use
+  std::string last_reject;       // the newest control message rejected
+  std::string recorder_error;
+  bool source_done = false;
+  TimeNs since_last_frame_ns = 0;
+  bool expects_lcm_controls = false;  // controls come over LCM (a live robot)
+  std::string controls_channel;
+  double latency_p50_ms = 0, latency_p99_ms = 0;  // since the last message
+};
+
+class HealthReporter {
+ public:
+  // Silence on the camera longer than this is reported.
+  static constexpr TimeNs kNoFramesNs = 2 * kNsPerSecond;
+
+  // The message for the period since the previous call (`period_s` long).
+  void Build(const DaemonCounters& now, const HealthStatus& status, double period_s, int64_t utime,
+             kincal::health_t* h);
+
+ private:
+  DaemonCounters prev_;
+};
+
+}  // namespace kincal::daemon

@@ -1,0 +1,108 @@
+#include "daemon/messages.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <opencv2/imgcodecs.hpp>
+
+namespace kincal::daemon {
+
+void FillFrameMessage(const Frame& f, FrameEncoding encoding, std::vector<uint8_t>* png,
+                      kincal::frame_t* m) {
+  m->schema_version = 1;
+  m->utime = f.utime;
+  m->device_utime = f.device_utime;
+  m->sequence = f.sequence;
+  m->width = f.width;
+  m->height = f.height;
+  m->stride = f.stride;
+  if (encoding == FrameEncoding::kPng && f.format == PixelFormat::kGrey) {
+    cv::Mat grey;
+    ToGrey(f, &grey);
+    cv::imencode(".png", grey, *png);
+    m->pixel_format = "PNG";
+    m->data.assign(png->begin(), png->end());
+  } else {
+    m->pixel_format = std::string(PixelFormatName(f.format));
+    m->data.resize(f.data.size());
+    std::memcpy(m->data.data(), f.data.data(), f.data.size());
+  }
+  m->size = static_cast<int32_t>(m->data.size());
+}
+
+void FillPoseMessage(const PoseSample& p, kincal::pose_t* m) {
+  m->schema_version = 1;
+  m->utime = p.utime;
+  m->source_utime = p.device_utime;
+  m->target_id = 0;
+  m->x = p.xytheta.x();
+  m->y = p.xytheta.y();
+  m->theta = p.xytheta.z();
+  for (int i = 0; i < 9; ++i) m->covariance[i] = p.covariance(i / 3, i % 3);
+  m->reprojection_rms_px = p.rms_px;
+  m->valid = p.valid ? 1 : 0;
+}
+
+void FillMarkersMessage(const PoseSample& p, double sigma_px, kincal::markers_t* m) {
+  m->schema_version = 1;
+  m->utime = p.utime;
+  m->frame_sequence = p.sequence;
+  m->num_markers = p.num_markers;
+  const auto n = static_cast<long>(p.num_markers);
+  m->u.assign(p.u.begin(), p.u.begin() + n);
+  m->v.assign(p.v.begin(), p.v.begin() + n);
+  m->sigma_px.assign(static_cast<size_t>(n), sigma_px);
+  m->id.assign(p.id.begin(), p.id.begin() + n);
+  m->target_id.assign(static_cast<size_t>(n), 0);
+}
+
+void FillParamsMessage(const System& sys, const StateVec& state, const StateMat& covariance,
+                       std::string_view estimator, int64_t update_count, int8_t status,
+                       int64_t utime, kincal::params_t* m) {
+  const size_t n = static_cast<size_t>(sys.num_params());
+  m->schema_version = 1;
+  m->utime = utime;
+  m->model = std::string(sys.model().name());
+  m->estimator = std::string(estimator);
+  m->num_params = static_cast<int32_t>(n);
+  m->names.resize(n);
+  m->units.resize(n);
+  m->values.resize(n);
+  m->sigmas.resize(n);
+  m->covariance.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const int a = static_cast<int>(i);
+    m->names[i] = sys.params()[i].name;
+    m->units[i] = sys.params()[i].unit;
+    m->values[i] = state[a];
+    m->sigmas[i] = std::sqrt(std::max(0.0, covariance(a, a)));
+    m->covariance[i].resize(n);
+    for (size_t k = 0; k < n; ++k) m->covariance[i][k] = covariance(a, static_cast<int>(k));
+  }
+  m->update_count = update_count;
+  m->status = status;
+}
+
+kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
+                                        int64_t utime) {
+  kincal::model_check_t m{};
+  m.schema_version = 1;
+  m.utime = utime;
+  m.model = model;
+  m.consistent = v.consistent ? 1 : 0;
+  m.nis_mean = v.nis_mean;
+  m.nis_expected = v.nis_expected;
+  m.window = v.window;
+  m.suspected_effect = v.suspected_effect;
+  m.confidence = v.confidence;
+  m.evidence = v.evidence;
+  return m;
+}
+
+void FillHealthCounters(const DaemonCounters& c, kincal::health_t* m) {
+#define KINCAL_HEALTH_FIELD(name, meaning) m->name = c.name;
+  KINCAL_DAEMON_COUNTERS(KINCAL_HEALTH_FIELD)
+#undef KINCAL_HEALTH_FIELD
+}
+
+}  // namespace kincal::daemon

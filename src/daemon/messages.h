@@ -1,0 +1,40 @@
+// Every LCM message kincald publishes, built from the pipeline's own types. Each builder
+// fills a message the caller keeps and reuses (vectors keep their capacity).
+#pragma once
+
+#include <kincal/frame_t.hpp>
+#include <kincal/health_t.hpp>
+#include <kincal/markers_t.hpp>
+#include <kincal/model_check_t.hpp>
+#include <kincal/params_t.hpp>
+#include <kincal/pose_t.hpp>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "kincal/analysis/model_check.h"
+#include "kincal/daemon/config.h"
+#include "kincal/daemon/daemon.h"
+#include "kincal/daemon/frame.h"
+#include "kincal/estimation/filter.h"
+#include "kincal/system.h"
+
+namespace kincal::daemon {
+
+// A frame as recorded: raw, or a GREY frame compressed to PNG (`png`: scratch buffer).
+// Throws FrameError when the frame cannot be turned into grey for PNG.
+void FillFrameMessage(const Frame& f, FrameEncoding encoding, std::vector<uint8_t>* png,
+                      kincal::frame_t* m);
+void FillPoseMessage(const PoseSample& p, kincal::pose_t* m);
+void FillMarkersMessage(const PoseSample& p, double sigma_px, kincal::markers_t* m);
+// The parameter block of a state: values, sigmas and covariance, by name and unit.
+// `status` is one of params_t::STATUS_*.
+void FillParamsMessage(const System& sys, const StateVec& state, const StateMat& covariance,
+                       std::string_view estimator, int64_t update_count, int8_t status,
+                       int64_t utime, kincal::params_t* m);
+kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
+                                        int64_t utime);
+// The counters, whole, into a health message (the status fields are the caller's).
+void FillHealthCounters(const DaemonCounters& c, kincal::health_t* m);
+
+}  // namespace kincal::daemon

@@ -1,0 +1,77 @@
+// The health message: every counter published under its own name, and what changed in
+// the period named in the message.
+#include "daemon/health.h"
+
+#include <gtest/gtest.h>
+
+namespace kincal::daemon {
+namespace {
+
+TEST(Health, EveryCounterIsPublishedWhole) {
+  DaemonCounters c;
+  int64_t v = 1;
+#define KINCAL_SET(name, meaning) c.name = v++;
+  KINCAL_DAEMON_COUNTERS(KINCAL_SET)
+#undef KINCAL_SET
+  HealthReporter r;
+  kincal::health_t h;
+  r.Build(c, HealthStatus{}, 1.0, 42, &h);
+  EXPECT_EQ(h.schema_version, 3);
+  EXPECT_EQ(h.utime, 42);
+  v = 1;
+#define KINCAL_CHECK_FIELD(name, meaning) EXPECT_EQ(h.name, v++) << #name;
+  KINCAL_DAEMON_COUNTERS(KINCAL_CHECK_FIELD)
+#undef KINCAL_CHECK_FIELD
+}
+
+TEST(Health, QueueDropsAreNamedInThePeriodTheyHappen) {
+  HealthReporter r;
+  HealthStatus s;
+  DaemonCounters c;
+  c.frames_captured = 30;
+  kincal::health_t h;
+  r.Build(c, s, 1.0, 1, &h);
+  EXPECT_EQ(h.ok, 1) << h.message;
+  EXPECT_DOUBLE_EQ(h.frame_rate_hz, 30.0);
+  c.frames_captured = 45;
+  c.poses_dropped_queue = 3;
+  c.controls_dropped_queue = 2;
+  r.Build(c, s, 0.5, 2, &h);
+  EXPECT_EQ(h.ok, 0);
+  EXPECT_DOUBLE_EQ(h.frame_rate_hz, 30.0);
+  EXPECT_NE(h.message.find("pose queue full"), std::string::npos) << h.message;
+  EXPECT_NE(h.message.find("control queue full"), std::string::npos) << h.message;
+  EXPECT_EQ(h.poses_dropped_queue, 3);
+  // Nothing new in the next period: ok again, the totals stay.
+  r.Build(c, s, 1.0, 3, &h);
+  EXPECT_EQ(h.ok, 1) << h.message;
+  EXPECT_EQ(h.controls_dropped_queue, 2);
+}
+
+TEST(Health, StandingConditionsAreReportedEveryTime) {
+  HealthReporter r;
+  HealthStatus s;
+  s.since_last_frame_ns = 3 * kNsPerSecond;
+  s.expects_lcm_controls = true;
+  s.controls_channel = "ROBOT_CMD";
+  s.source_error = "/dev/video0: VIDIOC_DQBUF: No such device";
+  DaemonCounters c;
+  c.frames_captured = 10;
+  kincal::health_t h;
+  for (int i = 0; i < 2; ++i) {
+    r.Build(c, s, 1.0, i, &h);
+    EXPECT_EQ(h.ok, 0);
+    EXPECT_NE(h.message.find("no frames for 2 s"), std::string::npos) << h.message;
+    EXPECT_NE(h.message.find("no controls received on ROBOT_CMD"), std::string::npos);
+    EXPECT_NE(h.message.find("source: /dev/video0: VIDIOC_DQBUF: No such device"),
+              std::string::npos);
+  }
+  s.source_done = true;  // a replay that ended: silence is expected
+  s.source_error.clear();
+  c.controls_received = 5;
+  r.Build(c, s, 1.0, 3, &h);
+  EXPECT_EQ(h.ok, 1) << h.message;
+}
+
+}  // namespace
+}  // namespace kincal::daemon
