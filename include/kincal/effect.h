@@ -24,6 +24,7 @@
 
 #include "kincal/model.h"
 #include "kincal/registry.h"
+#include "kincal/signature.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -60,10 +61,10 @@ class Effect {
   virtual const std::vector<ParamInfo>& params() const = 0;
   int num_params() const { return static_cast<int>(params().size()); }
 
-  // Residual signature, for the diagnosis: "component:regressor" pairs whose correlation
-  // this effect explains (components: along, cross, heading; regressors: see
-  // analysis/diagnosis.h).
-  virtual std::vector<std::string> signature() const { return {}; }
+  // Residual signature: the (component, regressor) correlations its absence leaves in the
+  // prediction errors (kincal/signature.h), which `kincal analyze` and the online model
+  // check look for.
+  virtual std::vector<SignatureTerm> signature() const { return {}; }
   // Whether the effect makes sense on `model` (e.g. backlash needs a steering channel).
   virtual bool AppliesTo(const KinematicModel& model) const = 0;
   // Binds to a model and the requested channels. Returns false with *error set if the

@@ -3,7 +3,20 @@
 #include <cmath>
 #include <sstream>
 
+#include "kincal/effect.h"
+
 namespace kincal {
+
+const ModelCheck::OnlineTerm ModelCheck::kOnlineTerms[ModelCheck::kNumOnlineTerms] = {
+    {{ResidualComponent::kAlong, Regressor::kAccel},
+     "along-track innovation vs recent speed-command change"},
+    {{ResidualComponent::kHeading, Regressor::kYawAccel},
+     "heading innovation vs recent turn-command change"},
+    {{ResidualComponent::kHeading, Regressor::kMoving}, "heading innovation biased while moving"},
+    {{ResidualComponent::kCross, Regressor::kTurnRate}, "cross-track innovation vs turn rate"},
+    {{ResidualComponent::kAlong, Regressor::kTurnRate}, "along-track innovation vs turn rate"},
+    {{ResidualComponent::kAlong, Regressor::kAbsTurnRate}, "along-track innovation vs |turn rate|"},
+};
 
 bool ModelCheckOptions::IsValid(std::string* error) const {
   if (!(lookback_s > 0.0) || !(z_threshold > 0.0) || min_samples < 10 ||
@@ -18,6 +31,20 @@ ModelCheck::ModelCheck(const System& sys, ModelCheckOptions options)
     : sys_(sys), options_(options) {
   std::string error;
   if (!options_.IsValid(&error)) throw std::invalid_argument("ModelCheck: " + error);
+  // Every registered effect that applies to the model, for each term of its signature this
+  // check measures (the signatures are the effects' own: kincal/signature.h).
+  for (int k = 0; k < kNumOnlineTerms; ++k) {
+    for (const auto& name : EffectRegistry::Instance().Names()) {
+      const auto effect = EffectRegistry::Instance().Create(name);
+      if (!effect->AppliesTo(sys_.model())) continue;
+      for (const auto& term : effect->signature()) {
+        if (term.component == kOnlineTerms[k].term.component &&
+            term.regressor == kOnlineTerms[k].term.regressor) {
+          suspects_.push_back({name, k});
+        }
+      }
+    }
+  }
 }
 
 void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& state,
@@ -90,24 +117,19 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     hs = std::sqrt(hs / moving);
     bias_z = hs > 0 ? hm / (hs / std::sqrt(static_cast<double>(moving))) : 0.0;
   }
-  struct Candidate {
-    const char* effect;
-    const char* what;
-    double z;
-  };
-  const Candidate candidates[] = {
-      {"time_offset", "along-track innovation vs recent speed-command change", corr_z(kAlong, kDv)},
-      {"time_offset", "heading innovation vs recent turn-command change", corr_z(kHeading, kDw)},
-      {"yaw_rate_bias", "heading innovation biased while moving", bias_z},
-      {"lever_arm", "cross-track innovation vs turn rate", corr_z(kCross, kW)},
-      {"lever_arm", "along-track innovation vs turn rate", corr_z(kAlong, kW)},
-      {"turn_slowdown", "along-track innovation vs |turn rate|", corr_z(kAlong, kAbsW)},
-  };
-  const Candidate* best = nullptr;
-  for (const auto& c : candidates) {
-    if (std::abs(c.z) >= options_.z_threshold &&
-        (best == nullptr || std::abs(c.z) > std::abs(best->z)))
+  // The z of every term this check measures, in kOnlineTerms' order.
+  const double term_z[kNumOnlineTerms] = {
+      corr_z(kAlong, kDv), corr_z(kHeading, kDw), bias_z,
+      corr_z(kCross, kW),  corr_z(kAlong, kW),    corr_z(kAlong, kAbsW)};
+  const Suspect* best = nullptr;
+  double best_z = 0.0;
+  for (const auto& c : suspects_) {
+    const double z = term_z[c.term];
+    if (std::abs(z) >= options_.z_threshold &&
+        (best == nullptr || std::abs(z) > std::abs(best_z))) {
       best = &c;
+      best_z = z;
+    }
   }
   const bool nis_ok = v.nis_mean < 3.0 * v.nis_expected;
   v.consistent = best == nullptr && nis_ok;
@@ -115,8 +137,14 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   ev.precision(3);
   if (best != nullptr) {
     v.suspected_effect = best->effect;
-    v.confidence = 1.0 - std::exp(-(std::abs(best->z) - options_.z_threshold));
-    ev << best->what << " (z = " << best->z << ")";
+    v.confidence = 1.0 - std::exp(-(std::abs(best_z) - options_.z_threshold));
+    ev << kOnlineTerms[best->term].what << " (z = " << best_z << ")";
+    std::string also;
+    for (const auto& c : suspects_) {
+      if (c.term == best->term && c.effect != best->effect)
+        also += (also.empty() ? "" : ", ") + c.effect;
+    }
+    if (!also.empty()) ev << ", the signature of " << also << " too";
   } else if (!nis_ok) {
     v.suspected_effect = "unknown";
     v.confidence = 0.5;

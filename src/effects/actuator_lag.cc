@@ -24,8 +24,9 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
   const std::vector<ParamInfo>& params() const override { return params_; }
   int num_states() const override { return static_cast<int>(channels_.size()); }
   bool time_varying() const override { return true; }
-  std::vector<std::string> signature() const override {
-    return {"along:accel", "heading:yaw_accel"};
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kAlong, Regressor::kAccel},
+            {ResidualComponent::kHeading, Regressor::kYawAccel}};
   }
 
   bool Bind(const KinematicModel& model, const std::vector<std::string>& channels,

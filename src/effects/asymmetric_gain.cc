@@ -16,8 +16,9 @@ class AsymmetricGain final : public EffectImpl<AsymmetricGain> {
   }
   EffectStage stage() const override { return EffectStage::kControlMap; }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  std::vector<std::string> signature() const override {
-    return {"heading:abs_turn_rate", "along:abs_speed"};
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kHeading, Regressor::kAbsTurnRate},
+            {ResidualComponent::kAlong, Regressor::kAbsSpeed}};
   }
   bool Bind(const KinematicModel& model, const std::vector<std::string>& channels,
             std::string* error) override {

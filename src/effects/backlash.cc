@@ -18,7 +18,9 @@ class Backlash final : public EffectImpl<Backlash> {
   const std::vector<ParamInfo>& params() const override { return params_; }
   int num_states() const override { return 1; }
   bool time_varying() const override { return true; }
-  std::vector<std::string> signature() const override { return {"heading:steer_reversal"}; }
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kHeading, Regressor::kSteerReversal}};
+  }
   bool AppliesTo(const KinematicModel& model) const override { return model.has_steering(); }
   bool Bind(const KinematicModel& model, const std::vector<std::string>& channels,
             std::string* error) override {

@@ -15,8 +15,9 @@ class DeadBand final : public EffectImpl<DeadBand> {
   }
   EffectStage stage() const override { return EffectStage::kControlMap; }
   const std::vector<ParamInfo>& params() const override { return params_; }
-  std::vector<std::string> signature() const override {
-    return {"along:small_speed", "heading:small_turn"};
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kAlong, Regressor::kSmallSpeed},
+            {ResidualComponent::kHeading, Regressor::kSmallTurn}};
   }
   bool Bind(const KinematicModel& model, const std::vector<std::string>& channels,
             std::string* error) override {

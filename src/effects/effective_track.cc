@@ -20,7 +20,9 @@ class EffectiveTrack final : public EffectImpl<EffectiveTrack> {
         {"c_track", "s/rad", 0.0, 0.1, "turns at several different turn rates"}};
     return kParams;
   }
-  std::vector<std::string> signature() const override { return {"heading:turn_rate_sq"}; }
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kHeading, Regressor::kTurnRateSq}};
+  }
   template <class T>
   void ModifyTwistT(const T* p, const T*, Twist<T>* tw) const {
     const T abs_w = ScalarOf(tw->omega) >= 0.0 ? tw->omega : -tw->omega;

@@ -11,7 +11,9 @@ class LateralSlip final : public EffectImpl<LateralSlip> {
   std::string_view description() const override {
     return "sideways slip velocity proportional to lateral acceleration";
   }
-  std::vector<std::string> signature() const override { return {"cross:lat_accel"}; }
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kCross, Regressor::kLatAccel}};
+  }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {{"c_slip", "s", 0.0, 0.02, "fast, tight turns"}};

@@ -16,8 +16,10 @@ class LeverArm final : public EffectImpl<LeverArm> {
   std::string_view description() const override {
     return "target offset (dx, dy, dtheta) from the kinematic reference point";
   }
-  std::vector<std::string> signature() const override {
-    return {"along:turn_rate", "cross:turn_rate", "heading:const"};
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kAlong, Regressor::kTurnRate},
+            {ResidualComponent::kCross, Regressor::kTurnRate},
+            {ResidualComponent::kHeading, Regressor::kConst}};
   }
   EffectStage stage() const override { return EffectStage::kMeasurement; }
   const std::vector<ParamInfo>& params() const override {

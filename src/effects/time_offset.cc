@@ -11,8 +11,9 @@ class TimeOffset final : public EffectImpl<TimeOffset> {
   std::string_view description() const override {
     return "command stream delayed by delay_s relative to the poses";
   }
-  std::vector<std::string> signature() const override {
-    return {"along:accel", "heading:yaw_accel"};
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kAlong, Regressor::kAccel},
+            {ResidualComponent::kHeading, Regressor::kYawAccel}};
   }
   EffectStage stage() const override { return EffectStage::kControlTiming; }
   const std::vector<ParamInfo>& params() const override {

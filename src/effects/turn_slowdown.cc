@@ -14,7 +14,9 @@ class TurnSlowdown final : public EffectImpl<TurnSlowdown> {
   std::string_view description() const override {
     return "forward speed lost in proportion to the turn rate (c_slow)";
   }
-  std::vector<std::string> signature() const override { return {"along:abs_turn_rate"}; }
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kAlong, Regressor::kAbsTurnRate}};
+  }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {

@@ -14,7 +14,9 @@ class YawRateBias final : public EffectImpl<YawRateBias> {
   std::string_view description() const override {
     return "constant turn-rate offset bias_rad_s while moving";
   }
-  std::vector<std::string> signature() const override { return {"heading:moving"}; }
+  std::vector<SignatureTerm> signature() const override {
+    return {{ResidualComponent::kHeading, Regressor::kMoving}};
+  }
   EffectStage stage() const override { return EffectStage::kMotion; }
   const std::vector<ParamInfo>& params() const override {
     static const std::vector<ParamInfo> kParams = {

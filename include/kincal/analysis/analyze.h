@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/analysis/diagnosis.h"
 #include "kincal/io/recording.h"
 
 namespace kincal {
@@ -79,13 +80,6 @@ struct FitReport {
   std::vector<std::string> unobservable;  // messages
 };
 
-struct DiagnosisTerm {
-  std::string component;  // along, cross, heading
-  std::string regressor;
-  double r = 0.0;  // correlation over windows
-  double z = 0.0;  // r * sqrt(effective number of independent windows)
-};
-
 struct ResidualTests {
   double bias_z[3] = {0, 0, 0};  // mean / standard error (along, cross, heading)
   double lag1_autocorr[3] = {0, 0, 0};
@@ -102,12 +96,6 @@ struct EffectTrial {
   double delta_bic = 0.0;
   double signature_z = 0.0;  // strength of its residual signature before the round
   std::string evidence;
-};
-
-struct ResidualPoint {
-  double t_s;  // window start, seconds since the recording origin
-  bool heldout;
-  double along, cross, heading;  // prediction error at the horizon (body frame), m, m, rad
 };
 
 struct AnalyzeResult {

@@ -1,21 +1,25 @@
 // ModelCheck: the residual diagnosis, online. Fed with every filter innovation, it keeps
 // a sliding window and tests whether the innovations are what a correct model predicts:
 // unbiased, of the expected size (NIS), and uncorrelated with what the robot was told to
-// do. A correlation names the effect whose signature it is:
-//   along-track innovation ~ recent change of commanded speed      -> time_offset (or lag)
-//   heading innovation     ~ recent change of commanded turn rate  -> time_offset (or lag)
-//   heading innovation biased while moving                         -> yaw_rate_bias
-//   position innovation    ~ turn rate                             -> lever_arm
-//   along-track innovation ~ |turn rate|                           -> turn_slowdown
-// The daemon publishes the verdict as kincal.model_check_t. Fixed-size ring buffer: no
-// allocation per update.
+// do. A correlation names the effect whose signature (Effect::signature(), in the
+// vocabulary of kincal/signature.h) has that term; the terms measured online are
+//   along-track innovation ~ recent change of commanded speed      (along, accel)
+//   heading innovation     ~ recent change of commanded turn rate  (heading, yaw_accel)
+//   heading innovation biased while moving                         (heading, moving)
+//   cross- and along-track innovation ~ turn rate                  (cross|along, turn_rate)
+//   along-track innovation ~ |turn rate|                           (along, abs_turn_rate)
+// so that, with the registered effects, they name time_offset (actuator_lag shares its
+// signature), yaw_rate_bias, lever_arm and turn_slowdown. The daemon publishes the verdict as
+// kincal.model_check_t. Fixed-size ring buffer: no allocation per update.
 #pragma once
 
 #include <array>
 #include <string>
+#include <vector>
 
 #include "kincal/control_signal.h"
 #include "kincal/estimation/filter.h"
+#include "kincal/signature.h"
 #include "kincal/system.h"
 #include "kincal/time.h"
 
@@ -53,11 +57,25 @@ class ModelCheck {
 
  private:
   enum Series { kAlong, kCross, kHeading, kDv, kDw, kW, kAbsW, kMoving, kNis, kNumSeries };
+  // The signature terms measured online (the command change over the lookback stands for
+  // accel and yaw_accel; the current turn rate for turn_rate).
+  struct OnlineTerm {
+    SignatureTerm term;
+    const char* what;
+  };
+  static constexpr int kNumOnlineTerms = 6;
+  static const OnlineTerm kOnlineTerms[kNumOnlineTerms];
+  // An effect whose signature has a measured term.
+  struct Suspect {
+    std::string effect;
+    int term;  // index into kOnlineTerms
+  };
   const System& sys_;
   ModelCheckOptions options_;
   std::array<std::array<double, kWindow>, kNumSeries> data_{};
   int count_ = 0;
   int next_ = 0;
+  std::vector<Suspect> suspects_;  // in kOnlineTerms order, effects in registration order
 };
 
 }  // namespace kincal

@@ -1,0 +1,184 @@
+#include "analysis/baseline_fit.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+namespace kincal::analysis {
+
+Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
+           const Eigen::VectorXd& p0, bool covariance, int threads, int max_iterations) {
+  BatchOptions o;
+  o.compute_covariance = false;
+  o.profiled_covariance = covariance;
+  o.max_iterations = max_iterations;
+  o.num_threads = threads;
+  Fit f;
+  try {
+    const BatchResult r = FitBatch(sys, u, meas, p0, o);
+    f.p = r.params;
+    f.cost = 2.0 * r.final_cost;
+    f.ok = f.p.allFinite() && std::isfinite(f.cost);
+    f.cov_robust = r.robust_covariance;
+    f.cov_model = r.profiled_covariance;
+    f.info = r.information;
+    f.n_eff = r.effective_residuals;
+  } catch (const std::exception&) {
+    f.ok = false;
+  }
+  return f;
+}
+
+std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, int to) {
+  std::vector<ParamEstimate> out;
+  for (int i = from; i < to; ++i) {
+    const auto& pi = sys.params()[static_cast<size_t>(i)];
+    ParamEstimate e{pi.name, pi.unit, f.p[i], NAN, NAN};
+    if (f.cov_robust.rows() == f.p.size()) e.sigma = std::sqrt(std::max(0.0, f.cov_robust(i, i)));
+    if (f.cov_model.rows() == f.p.size())
+      e.sigma_model = std::sqrt(std::max(0.0, f.cov_model(i, i)));
+    out.push_back(e);
+  }
+  return out;
+}
+
+// Parameters the information matrix cannot pin down.
+std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
+  std::vector<std::string> msgs;
+  const int np = static_cast<int>(f.p.size());
+  if (f.info.rows() != np) return msgs;
+  // Scale to relative units so that the test is unit free.
+  Eigen::VectorXd s(np);
+  for (int i = 0; i < np; ++i) {
+    s[i] = std::max(std::abs(f.p[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
+  }
+  const Eigen::MatrixXd I = s.asDiagonal() * f.info * s.asDiagonal();
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(I);
+  const double top = std::max(es.eigenvalues().maxCoeff(), 1e-300);
+  for (int k = 0; k < np; ++k) {
+    if (es.eigenvalues()[k] > 1e-9 * top && es.eigenvalues()[k] > 1e-6) continue;
+    const Eigen::VectorXd v = es.eigenvectors().col(k);
+    int imax = 0;
+    v.cwiseAbs().maxCoeff(&imax);
+    const auto& pi = sys.params()[static_cast<size_t>(imax)];
+    std::string msg = "parameter '" + pi.name + "' is not identifiable from this recording";
+    std::string others;
+    for (int i = 0; i < np; ++i) {
+      if (i != imax && std::abs(v[i]) > 0.3 * std::abs(v[imax]))
+        others += (others.empty() ? "" : ", ") + sys.params()[static_cast<size_t>(i)].name;
+    }
+    if (!others.empty()) msg += " (it trades off against " + others + ")";
+    if (!pi.excitation.empty()) msg += "; excite it with " + pi.excitation;
+    msgs.push_back(msg);
+  }
+  return msgs;
+}
+
+Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init) {
+  Eigen::VectorXd p(sys.num_params());
+  for (int i = 0; i < sys.num_params(); ++i)
+    p[i] = sys.params()[static_cast<size_t>(i)].default_value;
+  for (const auto& [name, v] : init) {
+    const int i = sys.ParamIndex(name);
+    if (i < 0) {
+      std::string known;
+      for (const auto& q : sys.params()) known += (known.empty() ? "" : ", ") + q.name;
+      throw AnalysisError("--init: model '" + std::string(sys.model().name()) +
+                          "' has no parameter '" + name + "' (its parameters: " + known + ")");
+    }
+    p[i] = v;
+  }
+  return p;
+}
+
+// Multi-start, staged fit of the bare model: short windows from many starts, then the best
+// refined on full windows. Reports when distinct optima fit equally well.
+Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
+                const AnalyzeOptions& o, FitReport* report) {
+  const auto& u = d.rec->controls;
+  const int np = sys.num_params();
+  std::vector<Eigen::VectorXd> starts = {p0};
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  auto is_scale = [&](int i) {
+    return sys.params()[static_cast<size_t>(i)].default_value != 0.0 && p0[i] != 0.0;
+  };
+  for (int i = 0; i < np; ++i) {
+    for (double f : {0.2, 0.5, 2.0, 5.0}) {
+      Eigen::VectorXd s = p0;
+      if (is_scale(i)) {
+        s[i] *= f;
+      } else {
+        s[i] += (f < 1.0 ? -1.0 : 1.0) * (f == 0.5 || f == 2.0 ? 1.0 : 3.0) *
+                sys.params()[static_cast<size_t>(i)].default_sigma;
+      }
+      starts.push_back(s);
+    }
+  }
+  for (int r = 0; r < 6; ++r) {
+    Eigen::VectorXd s = p0;
+    for (int i = 0; i < np; ++i) {
+      if (is_scale(i)) {
+        s[i] *= std::exp(std::log(5.0) * unit(rng));
+      } else {
+        s[i] += 2.0 * sys.params()[static_cast<size_t>(i)].default_sigma * gauss(rng);
+      }
+    }
+    starts.push_back(s);
+  }
+  std::vector<Fit> stage1;
+  for (size_t k = 0; k < starts.size(); ++k) {
+    if (o.progress)
+      o.progress(0.05 + 0.2 * static_cast<double>(k) / static_cast<double>(starts.size()),
+                 "baseline: multi-start");
+    Fit f = RunFit(sys, u, d.short_meas, starts[k], false, o.num_threads, 40);
+    if (f.ok) stage1.push_back(std::move(f));
+  }
+  if (stage1.empty())
+    throw AnalysisError(
+        "baseline fit failed from every start: check that the controls drive the model (units, "
+        "column order)");
+  std::sort(stage1.begin(), stage1.end(),
+            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
+  // Refine the best few distinct optima on the full windows.
+  std::vector<Fit> refined;
+  for (size_t k = 0; k < stage1.size() && refined.size() < 3; ++k) {
+    bool distinct = true;
+    for (const auto& r : refined) {
+      if (((stage1[k].p - r.p).array().abs() <= 1e-3 * (r.p.array().abs() + 1e-6)).all())
+        distinct = false;
+    }
+    if (!distinct && k > 0) continue;
+    if (stage1[k].cost > 1.5 * stage1[0].cost + 10.0) break;
+    Fit f = RunFit(sys, u, d.fit_meas, stage1[k].p, true, o.num_threads);
+    if (f.ok) refined.push_back(std::move(f));
+  }
+  if (refined.empty()) throw AnalysisError("baseline refinement failed");
+  std::sort(refined.begin(), refined.end(),
+            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
+  Fit best = refined.front();
+  report->unique = true;
+  for (size_t k = 1; k < refined.size(); ++k) {
+    const Fit& alt = refined[k];
+    if (alt.cost > best.cost * 1.01 + 2.0) continue;  // clearly worse
+    bool differs = false;
+    for (int i = 0; i < np && best.cov_robust.rows() == np; ++i) {
+      if (std::abs(alt.p[i] - best.p[i]) > 5.0 * std::sqrt(std::max(best.cov_robust(i, i), 1e-300)))
+        differs = true;
+    }
+    if (differs) {
+      report->unique = false;
+      std::ostringstream m;
+      m << "another optimum fits as well (cost " << alt.cost << " vs " << best.cost << "):";
+      for (int i = 0; i < np; ++i)
+        m << " " << sys.params()[static_cast<size_t>(i)].name << "=" << alt.p[i];
+      report->uniqueness = m.str();
+    }
+  }
+  return best;
+}
+
+}  // namespace kincal::analysis

@@ -1,0 +1,39 @@
+// Batch fits over the prediction windows, and the baseline: the bare model fitted by a
+// staged multi-start (short windows from many starts, the best refined on full windows).
+#pragma once
+
+#include <Eigen/Core>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "analysis/windows.h"
+#include "kincal/analysis/analyze.h"
+#include "kincal/control_signal.h"
+#include "kincal/estimation/batch.h"
+#include "kincal/system.h"
+
+namespace kincal::analysis {
+
+struct Fit {
+  Eigen::VectorXd p;
+  Eigen::MatrixXd cov_robust, cov_model, info;
+  double cost = 0.0;
+  double n_eff = 0.0;  // effective number of independent residuals
+  bool ok = false;
+};
+
+// One robust multiple-shooting fit from p0; ok = false when Ceres finds no finite solution.
+Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
+           const Eigen::VectorXd& p0, bool covariance, int threads, int max_iterations = 60);
+// Parameters [from, to) with their robust and model sigmas.
+std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, int to);
+// Parameters the information matrix cannot pin down, one sentence each.
+std::vector<std::string> Unobservable(const System& sys, const Fit& f);
+// The model's defaults with the user's --init values; throws AnalysisError on an unknown name.
+Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init);
+// The bare model's fit; *report says whether the optimum was unique.
+Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
+                const AnalyzeOptions& o, FitReport* report);
+
+}  // namespace kincal::analysis

@@ -1,0 +1,124 @@
+#include "analysis/regressors.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kincal/angles.h"
+
+namespace kincal::analysis {
+
+// Regressors per evaluation window, from the commanded body twist of the bare model.
+void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
+  const auto& u = d->rec->controls;
+  const KinematicModel& m = bare.model();
+  double vmax = 1e-12, wmax = 1e-12;
+  auto twist = [&](double t) {
+    const auto& c = u.At(t);
+    return m.BodyTwist(p.data(), c.data());
+  };
+  for (size_t i = 0; i < u.size(); ++i) {
+    const auto tw = m.BodyTwist(p.data(), u.ValuesAt(static_cast<int>(i)).data());
+    vmax = std::max(vmax, std::abs(tw.vx));
+    wmax = std::max(wmax, std::abs(tw.omega));
+  }
+  const int sc = m.steering_channel();
+  d->features.clear();
+  for (const auto& w : d->eval) {
+    const double ta = d->t[static_cast<size_t>(w.start)], tb = d->t[static_cast<size_t>(w.end)];
+    RegressorValues f;
+    double sv = 0, sw = 0, sav = 0, saw = 0, sww = 0, svw = 0, mov = 0, smv = 0, smw = 0;
+    const int K = 8;
+    for (int k = 0; k < K; ++k) {
+      const auto tw = twist(ta + (k + 0.5) * (tb - ta) / K);
+      sv += tw.vx;
+      sw += tw.omega;
+      sav += std::abs(tw.vx);
+      saw += std::abs(tw.omega);
+      sww += tw.omega * std::abs(tw.omega);
+      svw += tw.vx * tw.omega;
+      mov += (std::abs(tw.vx) > 1e-3 * vmax || std::abs(tw.omega) > 1e-3 * wmax) ? 1.0 : 0.0;
+      smv +=
+          (std::abs(tw.vx) > 0 && std::abs(tw.vx) < 0.25 * vmax) ? (tw.vx > 0 ? 1.0 : -1.0) : 0.0;
+      smw += (std::abs(tw.omega) > 0 && std::abs(tw.omega) < 0.25 * wmax)
+                 ? (tw.omega > 0 ? 1.0 : -1.0)
+                 : 0.0;
+    }
+    const auto a = twist(ta), b = twist(tb);
+    f.Set(Regressor::kSpeed, sv / K);
+    f.Set(Regressor::kTurnRate, sw / K);
+    f.Set(Regressor::kAbsSpeed, sav / K);
+    f.Set(Regressor::kAbsTurnRate, saw / K);
+    f.Set(Regressor::kTurnRateSq, sww / K);
+    f.Set(Regressor::kLatAccel, svw / K);
+    f.Set(Regressor::kMoving, mov / K);
+    f.Set(Regressor::kSmallSpeed, smv / K);
+    f.Set(Regressor::kSmallTurn, smw / K);
+    f.Set(Regressor::kAccel, b.vx - a.vx);
+    f.Set(Regressor::kYawAccel, b.omega - a.omega);
+    f.Set(Regressor::kConst, 1.0);
+    const double th = d->rec->poses[static_cast<size_t>(w.start)].z.z();
+    f.Set(Regressor::kCosHeading, std::cos(th));
+    f.Set(Regressor::kSinHeading, std::sin(th));
+    f.Set(Regressor::kTime, ta);
+    if (sc >= 0) {
+      const double s_now = u.At(ta)[static_cast<size_t>(sc)];
+      const double s_before = u.At(ta - 0.5)[static_cast<size_t>(sc)];
+      f.Set(Regressor::kSteerReversal, s_now > s_before ? 1.0 : (s_now < s_before ? -1.0 : 0.0));
+    }
+    d->features.push_back(std::move(f));
+  }
+}
+
+// Lag (s) by which the measured motion follows the commanded one, from the
+// cross-correlation of measured and commanded forward speed and turn rate over lags in
+// [-5, 5] s. The start for timing effects: a clock offset of seconds is far outside the
+// basin of a local fit started at zero.
+double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::VectorXd& p) {
+  const auto& P = d.rec->poses;
+  const auto& u = d.rec->controls;
+  const double dt = 0.05, half = 0.1;
+  std::vector<double> vm, wm, tgrid;
+  for (double t = std::max(d.t.front(), d.t_ctrl0) + half; t < d.t_split - half; t += dt) {
+    const auto a = std::lower_bound(d.t.begin(), d.t.end(), t - half);
+    const auto b = std::lower_bound(d.t.begin(), d.t.end(), t + half);
+    if (a == d.t.end() || b == d.t.end() || b <= a) continue;
+    const size_t i = static_cast<size_t>(a - d.t.begin()), j = static_cast<size_t>(b - d.t.begin());
+    const double span = d.t[j] - d.t[i];
+    if (span < half || span > 4 * half) continue;
+    const Eigen::Vector2d dp = P[j].z.head<2>() - P[i].z.head<2>();
+    const double th = P[i].z.z() + 0.5 * WrapAngle(P[j].z.z() - P[i].z.z());
+    vm.push_back((std::cos(th) * dp.x() + std::sin(th) * dp.y()) / span);
+    wm.push_back(WrapAngle(P[j].z.z() - P[i].z.z()) / span);
+    tgrid.push_back(t);
+  }
+  if (vm.size() < 50) return 0.0;
+  auto corr = [](const std::vector<double>& a, const std::vector<double>& b) {
+    const double n = static_cast<double>(a.size());
+    const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
+    const double mb = std::accumulate(b.begin(), b.end(), 0.0) / n;
+    double sab = 0, saa = 0, sbb = 0;
+    for (size_t k = 0; k < a.size(); ++k) {
+      sab += (a[k] - ma) * (b[k] - mb);
+      saa += (a[k] - ma) * (a[k] - ma);
+      sbb += (b[k] - mb) * (b[k] - mb);
+    }
+    return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
+  };
+  double best = -1e300, best_lag = 0.0;
+  std::vector<double> vc(vm.size()), wc(vm.size());
+  for (double lag = -5.0; lag <= 5.0 + 1e-9; lag += 0.02) {
+    for (size_t k = 0; k < tgrid.size(); ++k) {
+      const auto tw = bare.model().BodyTwist(p.data(), u.At(tgrid[k] - lag).data());
+      vc[k] = tw.vx;
+      wc[k] = tw.omega;
+    }
+    const double c = corr(vm, vc) + corr(wm, wc);
+    if (c > best) {
+      best = c;
+      best_lag = lag;
+    }
+  }
+  return best_lag;
+}
+
+}  // namespace kincal::analysis

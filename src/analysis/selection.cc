@@ -1,0 +1,133 @@
+#include "analysis/selection.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace kincal::analysis {
+namespace {
+
+// Starting points for one candidate's fit.
+std::vector<Eigen::VectorXd> Starts(const System& sys, const Effect& eff, const Eigen::VectorXd& p,
+                                    double command_lag) {
+  const int old_np = static_cast<int>(p.size());
+  const int np = sys.num_params();
+  Eigen::VectorXd s0(np);
+  s0.head(old_np) = p;
+  for (int i = old_np; i < np; ++i) s0[i] = sys.params()[static_cast<size_t>(i)].default_value;
+  std::vector<Eigen::VectorXd> starts = {s0};
+  const bool timing = eff.stage() == EffectStage::kControlTiming;
+  if (np - old_np == 1 && (timing || (eff.time_varying() && std::abs(command_lag) > 0.05))) {
+    // Timing: start at the lag the cross-correlation found (a delay or a lag's tau).
+    Eigen::VectorXd s = s0;
+    s[np - 1] = timing ? command_lag : std::abs(command_lag);
+    starts.push_back(s);
+  }
+  if (np - old_np == 1) {
+    for (double k : {-2.0, 2.0}) {
+      Eigen::VectorXd s = s0;
+      s[np - 1] += k * sys.params()[static_cast<size_t>(np - 1)].default_sigma;
+      starts.push_back(s);
+    }
+  }
+  return starts;
+}
+
+}  // namespace
+
+// Candidate effect specs for a model.
+std::vector<std::string> Candidates(const KinematicModel& m, const AnalyzeOptions& o) {
+  if (o.effects_mode == "none") return {};
+  if (o.effects_mode == "list") return o.effects;
+  std::vector<std::string> out;
+  for (const auto& name : EffectRegistry::Instance().Names()) {
+    auto e = EffectRegistry::Instance().Create(name);
+    if (!e->AppliesTo(m)) continue;
+    std::string error;
+    if (!e->Bind(m, {}, &error)) continue;
+    out.push_back(name);
+    // Channel-wise effects: also one candidate per channel.
+    auto probe = EffectRegistry::Instance().Create(name);
+    if (m.num_controls() > 1 && probe->Bind(m, {m.controls()[0].name}, &error)) {
+      for (const auto& c : m.controls()) out.push_back(name + "[" + c.name + "]");
+    }
+  }
+  return out;
+}
+
+FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
+                     const std::vector<std::string>& effects, int fit_windows) {
+  FitReport r;
+  r.effects = effects;
+  r.params = Estimates(sys, f, 0, sys.num_params());
+  r.fit = e.fit;
+  r.heldout = e.held;
+  r.cost = f.cost;
+  r.fit_windows = fit_windows;
+  r.unobservable = Unobservable(sys, f);
+  return r;
+}
+
+bool TryEffect(const std::string& spec, int round, const SelectionState& current, const Dataset& d,
+               const std::shared_ptr<const KinematicModel>& model, double command_lag,
+               const AnalyzeOptions& o, Tried* out) {
+  std::shared_ptr<const Effect> eff;
+  std::vector<std::shared_ptr<const Effect>> effects = current.effects;
+  try {
+    eff = MakeEffect(ParseEffectSpec(spec), *model);
+    effects.push_back(eff);
+  } catch (const std::exception& e) {
+    if (o.effects_mode == "list") throw AnalysisError(std::string("--effects: ") + e.what());
+    return false;
+  }
+  std::unique_ptr<System> sys;
+  try {
+    sys = std::make_unique<System>(model, effects);
+  } catch (const std::exception&) {
+    return false;  // conflicts with an accepted effect (same parameters)
+  }
+  Tried& t = *out;
+  t.trial.name = spec;
+  t.trial.round = round;
+  t.trial.signature_z = SignatureZ(eff->signature(), current.diagnosis);
+  t.effects = effects;
+  const auto& controls = d.rec->controls;
+  Fit best;
+  for (const auto& s : Starts(*sys, *eff, current.fit.p, command_lag)) {
+    Fit f = RunFit(*sys, controls, d.fit_meas, s, false, o.num_threads);
+    if (f.ok && (!best.ok || f.cost < best.cost)) best = std::move(f);
+  }
+  if (!best.ok) return false;
+  best = RunFit(*sys, controls, d.fit_meas, best.p, true, o.num_threads, 20);
+  if (!best.ok) return false;
+  t.fit = best;
+  t.eval = Evaluate(*sys, best.p, d);
+  const int old_np = static_cast<int>(current.fit.p.size());
+  const int np = sys->num_params();
+  const int k = np - old_np;
+  // Quasi-BIC: residuals within a window are correlated, so the sample size is the
+  // effective number of independent residuals (AR(1) design effect of the larger model,
+  // never fewer than one per window).
+  const double n_eff = std::max(static_cast<double>(d.fit_windows.size()), best.n_eff);
+  const double cost = current.fit.cost;
+  t.trial.delta_bic =
+      n_eff * std::log(std::max(best.cost, 1e-300) / std::max(cost, 1e-300)) + k * std::log(n_eff);
+  const ErrorStats& held = current.eval.held;
+  t.trial.heldout_gain = 1.0 - t.eval.held.pos_rms_m / std::max(held.pos_rms_m, 1e-300);
+  t.trial.combined_gain =
+      1.0 - Combined(t.eval.held, d.sigma) / std::max(Combined(held, d.sigma), 1e-300);
+  t.trial.params = Estimates(*sys, best, old_np, np);
+  const bool observable = Unobservable(*sys, best).empty();
+  std::ostringstream ev;
+  ev.precision(3);
+  ev << "signature z=" << t.trial.signature_z << "; fit cost " << (best.cost / cost - 1.0) * 100.0
+     << " %, dBIC " << t.trial.delta_bic << "; held-out position RMS " << held.pos_rms_m << " -> "
+     << t.eval.held.pos_rms_m << " m, heading RMS " << held.heading_rms_rad << " -> "
+     << t.eval.held.heading_rms_rad << " rad";
+  if (!observable) ev << "; not identifiable together with the model's parameters";
+  t.trial.evidence = ev.str();
+  t.ok = observable;
+  return true;
+}
+
+}  // namespace kincal::analysis

@@ -1,0 +1,147 @@
+#include "analysis/windows.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "kincal/angles.h"
+
+namespace kincal::analysis {
+namespace {
+
+int FindEnd(const std::vector<double>& t, int i, double h) {
+  const double target = t[static_cast<size_t>(i)] + h;
+  const auto it = std::lower_bound(t.begin() + i, t.end(), target - 1e-9);
+  if (it == t.end()) return -1;
+  const int j = static_cast<int>(it - t.begin());
+  if (t[static_cast<size_t>(j)] - target > 0.1 * h + 1e-3) return -1;  // a gap
+  return j;
+}
+
+std::vector<Window> NonOverlapping(const Dataset& d, double h, double t0, double t1, int max_n) {
+  std::vector<Window> w;
+  const auto& t = d.t;
+  int i = static_cast<int>(std::lower_bound(t.begin(), t.end(), t0) - t.begin());
+  while (i < static_cast<int>(t.size()) && t[static_cast<size_t>(i)] + h <= t1) {
+    const int j = FindEnd(t, i, h);
+    if (j < 0) {
+      ++i;
+      continue;
+    }
+    w.push_back({i, j});
+    i = j;
+  }
+  if (static_cast<int>(w.size()) > max_n) {
+    std::vector<Window> sub;
+    for (int k = 0; k < max_n; ++k)
+      sub.push_back(w[static_cast<size_t>(k) * w.size() / static_cast<size_t>(max_n)]);
+    w = sub;
+  }
+  return w;
+}
+
+std::vector<PoseMeasurement> WindowMeasurements(const Dataset& d, const std::vector<Window>& ws,
+                                                int per_window) {
+  std::vector<PoseMeasurement> m;
+  for (size_t k = 0; k < ws.size(); ++k) {
+    const auto& w = ws[k];
+    std::vector<int> idx = {w.start};
+    const int span = w.end - w.start;
+    const int n = std::min(per_window, span);
+    for (int q = 1; q <= n; ++q)
+      idx.push_back(w.start + static_cast<int>(std::lround(static_cast<double>(q) * span / n)));
+    idx.erase(std::unique(idx.begin(), idx.end()), idx.end());
+    for (int i : idx) {
+      const auto& p = d.rec->poses[static_cast<size_t>(i)];
+      m.push_back({p.t_ns, p.z, d.R, static_cast<int>(k)});
+    }
+  }
+  return m;
+}
+
+Eigen::Vector2d EstimatePoseSigma(const Recording& rec) {
+  std::vector<double> dp, dh;
+  const auto& P = rec.poses;
+  for (size_t i = 1; i + 1 < P.size(); ++i) {
+    const double a = NsToSeconds(P[i].t_ns - P[i - 1].t_ns),
+                 b = NsToSeconds(P[i + 1].t_ns - P[i].t_ns);
+    if (a <= 0 || b <= 0 || std::abs(a - b) > 0.2 * std::max(a, b) || a > 0.2) continue;
+    const Eigen::Vector2d d2 = P[i + 1].z.head<2>() - 2 * P[i].z.head<2>() + P[i - 1].z.head<2>();
+    dp.push_back(d2.x());
+    dp.push_back(d2.y());
+    dh.push_back(WrapAngle(P[i + 1].z.z() - P[i].z.z()) - WrapAngle(P[i].z.z() - P[i - 1].z.z()));
+  }
+  auto robust_sigma = [](std::vector<double> v, double floor) {
+    if (v.size() < 10) return floor;
+    const auto mid = v.begin() + static_cast<long>(v.size() / 2);
+    std::nth_element(v.begin(), mid, v.end());
+    const double med = *mid;
+    for (auto& x : v) x = std::abs(x - med);
+    std::nth_element(v.begin(), mid, v.end());
+    // Second difference of white noise has variance 6 sigma^2.
+    return std::max(floor, 1.4826 * *mid / std::sqrt(6.0));
+  };
+  return {robust_sigma(dp, 1e-4), robust_sigma(dh, 1e-4)};
+}
+
+}  // namespace
+
+Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::string>* warnings) {
+  Dataset d;
+  d.rec = &rec;
+  d.horizon = o.horizon_s;
+  if (rec.poses.size() < 20)
+    throw AnalysisError(rec.source + ": only " + std::to_string(rec.poses.size()) +
+                        " poses; at least 20 are needed");
+  if (rec.controls.size() < 2) throw AnalysisError(rec.source + ": fewer than 2 control samples");
+  for (const auto& p : rec.poses) d.t.push_back(rec.controls.ToSeconds(p.t_ns));
+  d.t_ctrl0 = rec.controls.TimeAt(0);
+  d.t_ctrl1 = rec.controls.TimeAt(static_cast<int>(rec.controls.size()) - 1);
+  const double t0 = std::max(d.t.front(), d.t_ctrl0);
+  const double t1 = std::min(d.t.back(), d.t_ctrl1 + o.horizon_s);
+  if (t1 - t0 < 4.0 * o.horizon_s) {
+    std::ostringstream m;
+    m << rec.source << ": controls and poses overlap for only " << std::max(0.0, t1 - t0)
+      << " s; at least 4 horizons (" << 4.0 * o.horizon_s << " s) are needed";
+    throw AnalysisError(m.str());
+  }
+  if (d.t_ctrl0 > d.t.front() + 1.0) {
+    std::ostringstream m;
+    m << "poses start " << d.t_ctrl0 - d.t.front()
+      << " s before the first control; that part is not used";
+    warnings->push_back(m.str());
+  }
+  d.t_split = t0 + o.fit_fraction * (t1 - t0);
+  d.sigma = o.pose_sigma ? *o.pose_sigma : EstimatePoseSigma(rec);
+  d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1])
+            .asDiagonal();
+  // Evaluation windows from (strided) measured poses; none straddles the split.
+  const int first = static_cast<int>(std::lower_bound(d.t.begin(), d.t.end(), t0) - d.t.begin());
+  const int n = static_cast<int>(d.t.size());
+  const int stride = std::max(1, (n - first) / o.max_eval_windows);
+  for (int i = first; i < n; i += stride) {
+    const int j = FindEnd(d.t, i, o.horizon_s);
+    if (j < 0 || d.t[static_cast<size_t>(j)] > t1) continue;
+    const bool fit = d.t[static_cast<size_t>(j)] <= d.t_split;
+    const bool held = d.t[static_cast<size_t>(i)] >= d.t_split;
+    if (fit || held) d.eval.push_back({i, j});
+  }
+  d.fit_windows = NonOverlapping(d, o.horizon_s, t0, d.t_split, o.max_fit_windows);
+  const double hs = std::max(0.2, 0.25 * o.horizon_s);
+  d.short_windows = NonOverlapping(d, hs, t0, d.t_split, std::min(150, o.max_fit_windows));
+  if (d.fit_windows.size() < 5)
+    throw AnalysisError(rec.source +
+                        ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
+                        "shorter than a few horizons)");
+  int held = 0;
+  for (const auto& w : d.eval) held += d.t[static_cast<size_t>(w.start)] >= d.t_split;
+  if (held < 5)
+    throw AnalysisError(rec.source +
+                        ": fewer than 5 prediction windows in the held-out part; lower "
+                        "--fit-fraction or --horizon");
+  d.fit_meas = WindowMeasurements(d, d.fit_windows, o.poses_per_window);
+  d.short_meas = WindowMeasurements(d, d.short_windows, std::max(2, o.poses_per_window / 2));
+  return d;
+}
+
+}  // namespace kincal::analysis
