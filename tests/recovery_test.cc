@@ -1,6 +1,6 @@
 // Parameter recovery on simulated data, every model, recursive and batch; effects known
-// to the estimator are recovered too; the batch covariance matches the Monte-Carlo spread
-// and the Cramer-Rao bound.
+// to the estimator are recovered too. (The batch's own tests, the Cramer-Rao bound among
+// them, are in estimation/batch_test.cc.)
 #include <gtest/gtest.h>
 
 #include <random>
@@ -96,53 +96,6 @@ INSTANTIATE_TEST_SUITE_P(
       for (const auto& e : info.param.effects) name += "_" + e;
       return name;
     });
-
-TEST(Bound, OneConstantControlRunCannotSeparateRadiiAndTrack) {
-  const System sys = MakeSystem("diffdrive");
-  ControlSignal u(2, 0);
-  const std::array<double, 2> w = {10.0, 20.0};
-  AppendConstant(&u, 0, SecondsToNs(10.0), w);
-  std::mt19937_64 rng(1);
-  const VecN<kMaxState> truth = testing::ToVec({0.031, 0.0313, 0.148});
-  std::vector<TimeNs> times;
-  for (int k = 0; k < 60; ++k) times.push_back(SecondsToNs(k / 6.0));
-  const auto traj = SimulateTruth(sys, sys.MakeState(0, 0, 0, truth, u, 0), u, times);
-  const auto meas = MeasurePoses(traj, Eigen::Matrix3d::Identity() * 1e-8, 0, rng);
-  const Eigen::Vector3d start = traj.front().x.head(3);
-  const BatchResult one = BoundAt(sys, u, meas, truth.cast<double>(), {start}, {});
-  EXPECT_FALSE(one.covariance_ok) << "a single constant-control run must be rank deficient";
-  // With a prior, the Bayesian bound exists.
-  BatchOptions with_prior;
-  with_prior.prior = ParamPrior{truth.cast<double>(), Eigen::Matrix3d::Identity() * 1e-6};
-  EXPECT_TRUE(BoundAt(sys, u, meas, truth.cast<double>(), {start}, with_prior).covariance_ok);
-}
-
-TEST(Bound, BatchSpreadMatchesCramerRao) {
-  // 40 Monte-Carlo repetitions of one design: the empirical variance of the batch
-  // estimates must agree with the bound (within the sampling error of 40 samples).
-  const System sys = MakeSystem("diffdrive");
-  const auto sc = AllModelScenarios()[0];
-  const VecN<kMaxState> truth = testing::ToVec(sc.truth);
-  std::mt19937_64 rng(9);
-  const Eigen::Vector3d sigma(0.002, 0.002, 0.01);
-  const auto d = testing::Simulate(sys, truth, sc.lo, sc.hi, 20.0, 10.0, sigma, rng);
-  const Eigen::Vector3d start = d.truth.front().x.head(3);
-  const BatchResult bound = BoundAt(sys, d.controls, d.meas, truth.cast<double>(), {start}, {});
-  ASSERT_TRUE(bound.covariance_ok);
-  Eigen::Vector3d sq = Eigen::Vector3d::Zero();
-  const int trials = 40;
-  for (int t = 0; t < trials; ++t) {
-    std::vector<TrajectoryPoint> tr = d.truth;
-    const auto meas = MeasurePoses(tr, sigma.array().square().matrix().asDiagonal(), 0, rng);
-    const BatchResult b = FitBatch(sys, d.controls, meas, truth.cast<double>() * 1.05, {});
-    sq += (b.params - truth.cast<double>()).array().square().matrix();
-  }
-  for (int i = 0; i < 3; ++i) {
-    const double ratio = sq[i] / trials / bound.covariance(i, i);
-    EXPECT_GT(ratio, 0.5) << i;
-    EXPECT_LT(ratio, 1.6) << i;
-  }
-}
 
 }  // namespace
 }  // namespace kincal

@@ -1,0 +1,120 @@
+// kincald's configuration: the documented examples load into typed options, choices are
+// parsed once into their enums, and a wrong value names the file, the line, the key and
+// what is expected.
+#include "kincal/daemon/config.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace kincal::daemon {
+namespace {
+
+const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
+
+std::string WriteConfig(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "kincal_config_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / name).string();
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string LoadError(const std::string& path) {
+  try {
+    LoadDaemonConfig(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, DocumentedExamplesLoadIntoTypedOptions) {
+  const DaemonConfig sim = LoadDaemonConfig(kConfigDir + "/kincald_sim.yaml");
+  std::string error;
+  EXPECT_TRUE(sim.IsValid(&error)) << error;
+  EXPECT_EQ(sim.source, SourceKind::kSim);
+  EXPECT_EQ(sim.pose.method, PoseMethod::kGroundPlane);
+  EXPECT_EQ(sim.robot.control_stamp, ControlStamp::kReceive);
+  EXPECT_EQ(sim.robot.model, "diffdrive");
+  EXPECT_DOUBLE_EQ(sim.robot.guess.at("d"), 0.160);
+  EXPECT_DOUBLE_EQ(sim.camera.nadir_height_m, 2.0);
+  // Relative paths are relative to the file's folder.
+  EXPECT_EQ(sim.sim.scenario, kConfigDir + "/sim_daemon.yaml");
+  const DaemonConfig v4l2 = LoadDaemonConfig(kConfigDir + "/kincald_v4l2.yaml");
+  EXPECT_TRUE(v4l2.IsValid(&error)) << error;
+  EXPECT_EQ(v4l2.source, SourceKind::kV4l2);
+  EXPECT_EQ(SourceName(v4l2.source), "v4l2");
+}
+
+TEST(Config, EveryChoiceParsesFromItsName) {
+  const std::string path = WriteConfig("choices.yaml", R"(source: replay
+replay: {path: run.lcm}
+v4l2: {pixel_format: MJPG}
+libcamera: {pixel_format: RGB3}
+pose: {method: lowe}
+robot: {control_stamp: sender}
+record: {frame_encoding: png}
+)");
+  const DaemonConfig c = LoadDaemonConfig(path);
+  EXPECT_EQ(c.source, SourceKind::kReplay);
+  EXPECT_EQ(c.v4l2.pixel_format, PixelFormat::kMjpeg);
+  EXPECT_EQ(c.libcamera.pixel_format, PixelFormat::kRgb24);
+  EXPECT_EQ(c.pose.method, PoseMethod::kLowe);
+  EXPECT_EQ(c.robot.control_stamp, ControlStamp::kSender);
+  EXPECT_EQ(c.record.frame_encoding, FrameEncoding::kPng);
+  EXPECT_EQ(FrameEncodingName(c.record.frame_encoding), "png");
+  EXPECT_EQ(PoseMethodName(c.pose.method), "lowe");
+  EXPECT_EQ(ControlStampName(c.robot.control_stamp), "sender");
+}
+
+TEST(Config, AWrongChoiceNamesFileLineKeyAndTheChoices) {
+  const std::string path = WriteConfig("bad_choice.yaml", "source: sim\npose:\n  method: pnp\n");
+  EXPECT_EQ(LoadError(path),
+            path + ":3: key 'pose.method': expected ground_plane or lowe, got 'pnp'");
+  const std::string fmt = WriteConfig("bad_format.yaml", "v4l2:\n  pixel_format: PNG\n");
+  EXPECT_EQ(
+      LoadError(fmt),
+      fmt + ":2: key 'v4l2.pixel_format': expected GREY, YUYV, MJPG, BGR3 or RGB3, got 'PNG'");
+  const std::string src = WriteConfig("bad_source.yaml", "source: usb\n");
+  EXPECT_EQ(LoadError(src),
+            src + ":1: key 'source': expected sim, v4l2, libcamera or replay, got 'usb'");
+}
+
+TEST(Config, EachSectionSaysWhatItExpects) {
+  DaemonConfig c;
+  std::string error;
+  ASSERT_TRUE(c.IsValid(&error)) << error;
+  c.v4l2.buffers = 2;
+  EXPECT_TRUE(c.IsValid(&error)) << "the v4l2 section is checked only when it is the source";
+  c.source = SourceKind::kV4l2;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "v4l2.buffers must be 4..32");
+  c = DaemonConfig{};
+  c.v4l2.pixel_format = PixelFormat::kRgb24;  // libcamera can, V4L2 here cannot
+  c.source = SourceKind::kV4l2;
+  EXPECT_FALSE(c.v4l2.IsValid(&error));
+  EXPECT_EQ(error, "v4l2.pixel_format must be GREY, YUYV or MJPG (got 'RGB3')");
+  c = DaemonConfig{};
+  c.filter.type = "kalman";
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_NE(error.find("filter.type: unknown filter 'kalman' (known: "), std::string::npos)
+      << error;
+  c = DaemonConfig{};
+  c.robot.guess["wheel_base"] = 0.3;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "robot.guess: model 'diffdrive' with its effects has no parameter 'wheel_base'");
+  c = DaemonConfig{};
+  c.filter.control_psd = {1e-4};
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "filter.control_psd needs 2 values for model diffdrive");
+  c = DaemonConfig{};
+  c.target.height_m = 2.5;  // above the nadir camera at 2 m
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "target.height_m must be >= 0 and below the camera");
+  EXPECT_THROW(Validate(c), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace kincal::daemon

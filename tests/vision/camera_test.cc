@@ -1,0 +1,66 @@
+// The camera model: distortion inverted, OpenCV YAML read and written.
+#include "kincal/vision/camera.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "kincal/vision/calibration.h"
+#include "kincal/vision/markers.h"
+#include "kincal/vision/opencv_baseline.h"
+#include "kincal/vision/pose.h"
+#include "kincal/vision/synthetic.h"
+#include "kincal/vision/target.h"
+#include "vision/vision_test_util.h"
+
+namespace kincal::vision {
+namespace {
+
+using namespace test_util;
+
+TEST(Camera, UndistortInvertsDistort) {
+  const CameraModel c = TestCamera();
+  for (double u = 0; u <= 640; u += 40) {
+    for (double v = 0; v <= 480; v += 40) {
+      const Eigen::Vector2d px(u, v);
+      EXPECT_LT((c.NormalizedToPixel(c.PixelToNormalized(px)) - px).norm(), 1e-9) << u << "," << v;
+    }
+  }
+}
+
+TEST(Camera, OpenCvYamlRoundTripAndErrors) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string path = (dir / "kincal_cam_test.yaml").string();
+  WriteCameraYaml(TestCamera(), path);
+  const CameraModel c = ReadCameraYaml(path);
+  EXPECT_EQ(c.width, 640);
+  EXPECT_DOUBLE_EQ(c.fx, 820);
+  EXPECT_DOUBLE_EQ(c.p2, -0.0004);
+  // The same numbers as OpenCV's own projection.
+  std::vector<cv::Point3d> obj = {{0.1, -0.05, 1.0}};
+  std::vector<cv::Point2d> img;
+  const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
+  const cv::Mat D = (cv::Mat_<double>(5, 1) << c.k1, c.k2, c.p1, c.p2, c.k3);
+  cv::projectPoints(obj, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), K, D, img);
+  const Eigen::Vector2d ours = c.Project(Eigen::Vector3d(0.1, -0.05, 1.0));
+  EXPECT_NEAR(ours.x(), img[0].x, 1e-9);
+  EXPECT_NEAR(ours.y(), img[0].y, 1e-9);
+  const std::string bad = (dir / "kincal_cam_bad.yaml").string();
+  std::ofstream(bad) << "%YAML:1.0\n---\nimage_width: 640\n";
+  try {
+    ReadCameraYaml(bad);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace kincal::vision

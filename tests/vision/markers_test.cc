@@ -1,0 +1,195 @@
+// Markers: sub-pixel centres on synthetic images, identification among distractors,
+// perspective bias correction, tracking, two targets told apart, light on dark.
+#include "kincal/vision/markers.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "kincal/vision/calibration.h"
+#include "kincal/vision/camera.h"
+#include "kincal/vision/opencv_baseline.h"
+#include "kincal/vision/pose.h"
+#include "kincal/vision/synthetic.h"
+#include "kincal/vision/target.h"
+#include "vision/vision_test_util.h"
+
+namespace kincal::vision {
+namespace {
+
+using namespace test_util;
+
+TEST(Markers, SubPixelCentresOnSyntheticImages) {
+  // Markers about 14 px across at 1 grey level of noise: centre error RMS <= 0.02 px.
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  const FloorExtrinsics floor = Overhead();
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> U(-0.2, 0.2);
+  RenderOptions ro;
+  DetectorOptions dopt;
+  double sq = 0;
+  int n = 0;
+  for (int f = 0; f < 30; ++f) {
+    const Pose3 pose = TargetPose(floor, Draw3(U, rng, 10), 0.1);
+    const RenderedFrame fr = RenderTarget(cam, pose, layout, ro, rng);
+    auto markers = DetectMarkers(fr.image, dopt);
+    ASSERT_EQ(markers.size(), 4u) << "frame " << f;
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers)) << "frame " << f;
+    for (const auto& m : markers) {
+      EXPECT_GT(m.diameter_px, 10.0);
+      sq += (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).squaredNorm() / 2.0;
+      ++n;
+    }
+  }
+  const double rms = std::sqrt(sq / n);
+  RecordProperty("centre_rms_px", std::to_string(rms));
+  EXPECT_LE(rms, 0.02) << "centre RMS per axis " << rms << " px";
+}
+
+TEST(Markers, IdentifiesTheTargetAmongDistractorsAndRejectsNonCircles) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(3);
+  const Pose3 pose = TargetPose(Overhead(), Eigen::Vector3d(0.05, -0.1, 2.0), 0.1);
+  RenderedFrame fr = RenderTarget(cam, pose, layout, RenderOptions{}, rng);
+  cv::rectangle(fr.image, cv::Rect(30, 30, 40, 8), cv::Scalar(40), cv::FILLED);  // a stripe
+  std::vector<Rejected> rejected;
+  auto markers = DetectMarkers(fr.image, DetectorOptions{}, {}, &rejected);
+  ASSERT_EQ(markers.size(), 4u);
+  ASSERT_FALSE(rejected.empty());
+  EXPECT_NE(rejected[0].reason.find("circularity"), std::string::npos) << rejected[0].reason;
+  std::shuffle(markers.begin(), markers.end(), rng);
+  ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+  for (const auto& m : markers) {
+    EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  }
+}
+
+TEST(Markers, PerspectiveBiasCorrectionOnAnObliqueView) {
+  // A camera looking at the floor 45 degrees off the vertical: the image of a marker's
+  // centre is off the centre of its image by a measurable amount; the correction removes it.
+  CameraModel cam = TestCamera();
+  FloorExtrinsics floor;
+  floor.R_cf = Eigen::AngleAxisd(M_PI - 0.8, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  floor.t_cf = Eigen::Vector3d(0.0, 0.0, 0.55);
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(5);
+  RenderOptions ro;
+  ro.noise_sigma = 0.0;
+  const Pose3 pose = TargetPose(floor, Eigen::Vector3d(0.0, 0.0, 0.4), 0.0);
+  const RenderedFrame fr = RenderTarget(cam, pose, layout, ro, rng);
+  auto markers = DetectMarkers(fr.image, DetectorOptions{});
+  ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+  double before = 0, after = 0;
+  for (const auto& m : markers)
+    before = std::max(before, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  const double largest = CorrectPerspectiveBias(cam, pose, layout, &markers);
+  for (const auto& m : markers)
+    after = std::max(after, (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm());
+  EXPECT_GT(largest, 0.02);
+  EXPECT_GT(before, 0.02);
+  EXPECT_LT(after, 0.4 * before) << "before " << before << " after " << after;
+}
+
+TEST(Markers, TrackerSearchesNearTheLastTargetAndFallsBack) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(9);
+  MarkerTracker tracker(cam, layout, DetectorOptions{});
+  const FloorExtrinsics floor = Overhead();
+  for (int k = 0; k < 10; ++k) {
+    const Eigen::Vector3d q =
+        k < 9 ? Eigen::Vector3d(0.01 * k, 0.0, 0.05 * k) : Eigen::Vector3d(-0.2, 0.2, 1.0);
+    const RenderedFrame fr =
+        RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    const auto markers = tracker.Track(fr.image);
+    ASSERT_EQ(markers.size(), 4u) << k;
+    for (const auto& m : markers)
+      EXPECT_LT((m.centre_px - fr.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+    if (k > 0 && k < 9) {
+      EXPECT_FALSE(tracker.last_was_full_frame()) << k;
+    }
+  }
+  EXPECT_EQ(tracker.full_frame_searches(), 2);  // the first frame and the jump
+}
+
+TEST(Markers, TwoRobotsToldApartByTheirLayouts) {
+  const CameraModel cam = TestCamera();
+  TargetLayout a = TargetLayout::Thesis();
+  TargetLayout b;
+  b.name = "second";
+  b.markers = {{0.04, 0.03}, {0.04, -0.03}, {-0.04, 0.0}, {0.0, -0.03}};  // a different shape
+  std::mt19937_64 rng(4);
+  const FloorExtrinsics floor = Overhead();
+  RenderOptions ro;
+  const RenderedFrame fa =
+      RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(-0.12, 0.05, 0.4), 0.1), a, ro, rng);
+  const RenderedFrame fb =
+      RenderTarget(cam, TargetPose(floor, Eigen::Vector3d(0.13, -0.06, 2.2), 0.1), b, ro, rng);
+  cv::Mat both;
+  cv::min(fa.image, fb.image, both);  // dark markers of both robots in one frame
+  const auto detections = DetectMarkers(both, DetectorOptions{});
+  ASSERT_EQ(detections.size(), 8u);
+  const auto targets = IdentifyTargets(cam, {a, b}, detections);
+  ASSERT_EQ(targets[0].size(), 4u);
+  ASSERT_EQ(targets[1].size(), 4u);
+  for (const auto& m : targets[0])
+    EXPECT_LT((m.centre_px - fa.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+  for (const auto& m : targets[1])
+    EXPECT_LT((m.centre_px - fb.centres[static_cast<size_t>(m.id)]).norm(), 0.1);
+}
+
+TEST(Markers, LightOnDarkAndMoreAccurateThanSimpleBlobDetector) {
+  const CameraModel cam = TestCamera();
+  TargetLayout layout = TargetLayout::Thesis();
+  layout.dark_on_light = false;
+  std::mt19937_64 rng(13);
+  std::uniform_real_distribution<double> U(-0.2, 0.2);
+  DetectorOptions dopt;
+  dopt.dark_on_light = false;
+  cv::SimpleBlobDetector::Params bp;
+  bp.blobColor = 255;
+  bp.minArea = 10;
+  auto blob = cv::SimpleBlobDetector::create(bp);
+  double ours = 0, theirs = 0;
+  int n = 0, m_theirs = 0;
+  for (int f = 0; f < 10; ++f) {
+    const RenderedFrame fr = RenderTarget(cam, TargetPose(Overhead(), Draw3(U, rng, 10), 0.1),
+                                          layout, RenderOptions{}, rng);
+    auto markers = DetectMarkers(fr.image, dopt);
+    ASSERT_EQ(markers.size(), 4u);
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers));
+    for (const auto& mk : markers) {
+      ours += (mk.centre_px - fr.centres[static_cast<size_t>(mk.id)]).squaredNorm();
+      ++n;
+    }
+    std::vector<cv::KeyPoint> kp;
+    blob->detect(fr.image, kp);
+    for (const auto& c : fr.centres) {
+      double best = 1e9;
+      for (const auto& k : kp)
+        best = std::min(best, (Eigen::Vector2d(k.pt.x, k.pt.y) - c).squaredNorm());
+      if (best < 4.0) {
+        theirs += best;
+        ++m_theirs;
+      }
+    }
+  }
+  ASSERT_GT(m_theirs, 0);
+  const double rms_ours = std::sqrt(ours / n), rms_theirs = std::sqrt(theirs / m_theirs);
+  RecordProperty("rms_ours_px", std::to_string(rms_ours));
+  RecordProperty("rms_simpleblob_px", std::to_string(rms_theirs));
+  EXPECT_LT(rms_ours, 0.03);
+  EXPECT_LT(rms_ours, rms_theirs) << "ours " << rms_ours << " SimpleBlobDetector " << rms_theirs;
+}
+
+namespace {}  // namespace
+
+}  // namespace
+}  // namespace kincal::vision

@@ -1,0 +1,126 @@
+// Pose from markers: the Lowe Jacobian against finite differences, Lowe against
+// cv::solvePnP, and the ground-plane pose through rendered images within its covariance.
+#include "kincal/vision/pose.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
+#include <random>
+
+#include "kincal/vision/calibration.h"
+#include "kincal/vision/camera.h"
+#include "kincal/vision/markers.h"
+#include "kincal/vision/opencv_baseline.h"
+#include "kincal/vision/synthetic.h"
+#include "kincal/vision/target.h"
+#include "vision/vision_test_util.h"
+
+namespace kincal::vision {
+namespace {
+
+using namespace test_util;
+
+TEST(Lowe, JacobianMatchesFiniteDifferences) {
+  const Pose3 pose = TargetPose(Overhead(), Eigen::Vector3d(0.1, 0.2, 0.7), 0.1);
+  const Eigen::Vector3d p(0.045, -0.025, 0.0);
+  const auto J = LoweJacobian(p, pose);
+  auto proj = [&](const Pose3& q) {
+    const Eigen::Vector3d c = q.R * p + q.t;
+    return Eigen::Vector2d(c.x() / c.z(), c.y() / c.z());
+  };
+  for (int k = 0; k < 6; ++k) {
+    const double h = 1e-7;
+    Pose3 a = pose, b = pose;
+    if (k < 3) {
+      a.t[k] += h;
+      b.t[k] -= h;
+    } else {
+      Eigen::Vector3d w = Eigen::Vector3d::Zero();
+      w[k - 3] = h;
+      a.R = Eigen::AngleAxisd(h, w.normalized()).toRotationMatrix() * pose.R;
+      b.R = Eigen::AngleAxisd(-h, w.normalized()).toRotationMatrix() * pose.R;
+    }
+    const Eigen::Vector2d fd = (proj(a) - proj(b)) / (2 * h);
+    EXPECT_LT((fd - J.col(k)).norm(), 1e-6 * std::max(1.0, fd.norm())) << "column " << k;
+  }
+}
+
+TEST(Lowe, RecoversPoseAndAgreesWithSolvePnP) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  std::mt19937_64 rng(1);
+  std::normal_distribution<double> g(0.0, 0.05);  // px
+  std::vector<Eigen::Vector3d> obj;
+  for (const auto& m : layout.markers) obj.emplace_back(m.x(), m.y(), 0.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Pose3 truth =
+        TargetPose(Overhead(), Eigen::Vector3d(0.2 * g(rng) / 0.05, 0.1, trial * 0.3), 0.1);
+    std::vector<Eigen::Vector2d> norm;
+    std::vector<cv::Point3d> cobj;
+    std::vector<cv::Point2d> cimg;
+    for (const auto& p : obj) {
+      const Eigen::Vector2d px = cam.Project(truth.R * p + truth.t) + Draw2(g, rng);
+      norm.push_back(cam.PixelToNormalized(px));
+      cobj.emplace_back(p.x(), p.y(), p.z());
+      cimg.emplace_back(norm.back().x(), norm.back().y());
+    }
+    Pose3 init;
+    ASSERT_TRUE(PlanarInitialPose(obj, norm, &init));
+    const LoweResult r = LowePose(obj, norm, init, cam.fx, 0.05);
+    ASSERT_TRUE(r.ok);
+    // Pose error against the truth within 4 sigma of its own covariance (position).
+    const Eigen::Vector3d dt = r.pose.t - truth.t;
+    const Eigen::Matrix3d Ct = r.covariance.topLeftCorner<3, 3>();
+    EXPECT_LT(dt.dot(Ct.ldlt().solve(dt)), 25.0) << trial;
+    // solvePnP (ITERATIVE) minimises the same reprojection error: same answer.
+    cv::Mat rvec, tvec;
+    cv::solvePnP(cobj, cimg, cv::Mat::eye(3, 3, CV_64F), cv::Mat(), rvec, tvec, false,
+                 cv::SOLVEPNP_ITERATIVE);
+    EXPECT_LT(
+        (r.pose.t - Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2)))
+            .norm(),
+        1e-6);
+  }
+}
+
+TEST(GroundPlane, PoseFromRenderedImagesWithinItsCovariance) {
+  const CameraModel cam = TestCamera();
+  const TargetLayout layout = TargetLayout::Thesis();
+  const FloorExtrinsics floor = Overhead();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> U(-0.25, 0.25);
+  std::vector<Eigen::Vector3d> obj;
+  for (const auto& m : layout.markers) obj.emplace_back(m.x(), m.y(), 0.0);
+  int inside = 0;
+  const int frames = 20;
+  for (int f = 0; f < frames; ++f) {
+    const Eigen::Vector3d q = Draw3(U, rng, 12);
+    const RenderedFrame fr =
+        RenderTarget(cam, TargetPose(floor, q, 0.1), layout, RenderOptions{}, rng);
+    std::vector<Rejected> rejected;
+    auto markers = DetectMarkers(fr.image, DetectorOptions{}, {}, &rejected);
+    ASSERT_TRUE(IdentifyTarget(cam, layout, &markers))
+        << "frame " << f << ": " << markers.size() << " markers, " << rejected.size() << " rejected"
+        << (rejected.empty() ? "" : ": " + rejected[0].reason);
+    std::vector<Eigen::Vector2d> norm(4);
+    for (const auto& m : markers)
+      norm[static_cast<size_t>(m.id)] = cam.PixelToNormalized(m.centre_px);
+    const PlanarPose p =
+        GroundPlanePose(floor, 0.1, obj, norm, Eigen::Vector3d(0, 0, q.z() + 0.3), cam.fx, 0.02);
+    ASSERT_TRUE(p.ok);
+    Eigen::Vector3d e = p.xytheta - q;
+    e.z() = std::remainder(e.z(), 2 * M_PI);
+    EXPECT_LT(e.head<2>().norm(), 1e-3) << f;
+    if (e.dot(p.covariance.ldlt().solve(e)) < 14.2) ++inside;  // chi2(3) 99.7 %
+  }
+  EXPECT_GE(inside, frames * 8 / 10);
+}
+
+namespace {}  // namespace
+
+}  // namespace
+}  // namespace kincal::vision
