@@ -4,6 +4,7 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "kincal/check.h"
 #include "kincal/estimation/online_calibrator.h"
 
 namespace kincal {
@@ -252,17 +253,21 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
       BatchOptions quick = bopt;
       quick.compute_covariance = false;
       const BatchResult b0 = FitBatch(sys, d.controls, early, guess, quick);
+      KINCAL_CHECK(b0.status.ok(), b0.status.message().c_str());  // simulated: a bug if not
       const BatchResult b = FitBatch(sys, d.controls, d.all, b0.params, bopt);
+      KINCAL_CHECK(b.status.ok(), b.status.message().c_str());
       record("batch", b.params,
              b.covariance_ok ? Eigen::Matrix3d(b.covariance) : Eigen::Matrix3d::Constant(NAN));
     }
     // Bayesian bound at the truth, with the same prior.
     const BatchResult bound = BoundAt(sys, d.controls, d.all, truth, d.starts, bopt);
+    KINCAL_CHECK(bound.status.ok(), bound.status.message().c_str());
     const double eb = ExpectedNnde(bound.covariance, truth);
     bound_sq += eb * eb;
     if (o.per_run) {
       for (const Run& run : d.runs) {
         const BatchResult b1 = BoundAt(sys, d.controls, run.meas, truth, {run.start_pose}, bopt);
+        KINCAL_CHECK(b1.status.ok(), b1.status.message().c_str());
         per_run_bound_sum += ExpectedNnde(b1.covariance, truth);
         ++per_run_count;
       }

@@ -16,18 +16,15 @@ Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeas
   o.max_iterations = max_iterations;
   o.num_threads = threads;
   Fit f;
-  try {
-    const BatchResult r = FitBatch(sys, u, meas, p0, o);
-    f.p = r.params;
-    f.cost = 2.0 * r.final_cost;
-    f.ok = f.p.allFinite() && std::isfinite(f.cost);
-    f.cov_robust = r.robust_covariance;
-    f.cov_model = r.profiled_covariance;
-    f.info = r.information;
-    f.n_eff = r.effective_residuals;
-  } catch (const std::exception&) {
-    f.ok = false;
-  }
+  const BatchResult r = FitBatch(sys, u, meas, p0, o);
+  if (!r.status.ok()) return f;  // not ok: the caller tries another start or candidate
+  f.p = r.params;
+  f.cost = 2.0 * r.final_cost;
+  f.ok = f.p.allFinite() && std::isfinite(f.cost);
+  f.cov_robust = r.robust_covariance;
+  f.cov_model = r.profiled_covariance;
+  f.info = r.information;
+  f.n_eff = r.effective_residuals;
   return f;
 }
 

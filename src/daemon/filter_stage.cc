@@ -228,16 +228,14 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t) {
     bo.huber_scale = kRefitHuberSigmas;
     bo.max_iterations = kRefitMaxIterations;
     bo.warmup_s = 0.0;
-    try {
-      const BatchResult br = FitBatch(sys_, cal_->controls(), meas, prior_.mean.head(np), bo);
-      if (br.params.allFinite() && br.covariance.rows() == np && br.covariance.allFinite()) {
-        start = cal_->params();
-        start.head(np) = br.params;
-        start_cov = kRefitCovarianceInflation * br.covariance;
-        how = "a batch fit over " + std::to_string(meas.size()) + " poses";
-      }
-    } catch (const std::exception& e) {
-      spdlog::warn("batch re-fit failed: {}", e.what());
+    const BatchResult br = FitBatch(sys_, cal_->controls(), meas, prior_.mean.head(np), bo);
+    if (!br.status.ok()) {
+      spdlog::warn("batch re-fit failed: {}", br.status.message());
+    } else if (br.params.allFinite() && br.covariance.rows() == np && br.covariance.allFinite()) {
+      start = cal_->params();
+      start.head(np) = br.params;
+      start_cov = kRefitCovarianceInflation * br.covariance;
+      how = "a batch fit over " + std::to_string(meas.size()) + " poses";
     }
   }
   auto fresh =

@@ -24,10 +24,7 @@ class SegmentCost final : public ceres::CostFunction {
     mutable_parameter_block_sizes()->push_back(3);
     mutable_parameter_block_sizes()->push_back(sys_.num_params());
     for (const auto* m : meas_) {
-      Eigen::LLT<Eigen::Matrix3d> llt(m->R);
-      if (llt.info() != Eigen::Success) {
-        throw std::invalid_argument("measurement covariance is not positive definite");
-      }
+      Eigen::LLT<Eigen::Matrix3d> llt(m->R);  // positive definite: CheckMeasurements
       // Whitening W with W^T W = R^-1: W = L^-1.
       whiten_.push_back(llt.matrixL().solve(Eigen::Matrix3d::Identity()));
       times_.push_back(u_.ToSeconds(m->t_ns));
@@ -116,10 +113,7 @@ class PriorCost final : public ceres::CostFunction {
     const int n = static_cast<int>(mean_.size());
     set_num_residuals(n);
     mutable_parameter_block_sizes()->push_back(n);
-    Eigen::LLT<Eigen::MatrixXd> llt(prior.covariance);
-    if (llt.info() != Eigen::Success) {
-      throw std::invalid_argument("prior covariance is not positive definite");
-    }
+    Eigen::LLT<Eigen::MatrixXd> llt(prior.covariance);  // positive definite: IsValid
     whiten_ = llt.matrixL().solve(Eigen::MatrixXd::Identity(n, n));
   }
   bool Evaluate(double const* const* parameters, double* residuals,
@@ -147,23 +141,38 @@ struct Problem {
   Eigen::VectorXd params;
 };
 
+// The measurements a fit can use: some, in segments of non-decreasing id, times not going
+// backwards within a segment, each covariance positive definite.
+Status CheckMeasurements(std::span<const PoseMeasurement> meas) {
+  if (meas.empty()) return Status::Error("no pose measurements");
+  for (size_t k = 0; k < meas.size(); ++k) {
+    const auto& m = meas[k];
+    if (k > 0 && m.segment < meas[k - 1].segment) {
+      return Status::Error("segment ids must be non-decreasing (measurement " + std::to_string(k) +
+                           ")");
+    }
+    if (k > 0 && m.segment == meas[k - 1].segment && m.t_ns < meas[k - 1].t_ns) {
+      return Status::Error("measurement times go backwards within segment " +
+                           std::to_string(m.segment));
+    }
+    if (!m.R.allFinite() || Eigen::LLT<Eigen::Matrix3d>(m.R).info() != Eigen::Success) {
+      return Status::Error("measurement " + std::to_string(k) +
+                           ": covariance is not positive definite");
+    }
+  }
+  return {};
+}
+
+// Builds the problem from measurements that passed CheckMeasurements.
 void Build(const System& sys, const ControlSignal& controls, std::span<const PoseMeasurement> meas,
            const BatchOptions& options, Problem* pb) {
-  if (meas.empty()) throw std::invalid_argument("batch: no pose measurements");
   // Group by segment, in order of appearance.
   std::vector<std::vector<const PoseMeasurement*>> groups;
   int current = meas.front().segment - 1;
   for (const auto& m : meas) {
     if (groups.empty() || m.segment != current) {
-      if (!groups.empty() && m.segment < current) {
-        throw std::invalid_argument("batch: segment ids must be non-decreasing");
-      }
       groups.emplace_back();
       current = m.segment;
-    }
-    if (!groups.back().empty() && m.t_ns < groups.back().back()->t_ns) {
-      throw std::invalid_argument("batch: measurement times go backwards within segment " +
-                                  std::to_string(m.segment));
     }
     groups.back().push_back(&m);
   }
@@ -278,6 +287,11 @@ bool BatchOptions::IsValid(const System& sys, std::string* error) const {
       *error = "prior must have " + std::to_string(np) + " parameters";
       return false;
     }
+    if (!prior->covariance.allFinite() ||
+        Eigen::LLT<Eigen::MatrixXd>(prior->covariance).info() != Eigen::Success) {
+      *error = "prior covariance is not positive definite";
+      return false;
+    }
   }
   return true;
 }
@@ -286,10 +300,20 @@ BatchResult FitBatch(const System& sys, const ControlSignal& controls,
                      std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params0,
                      const BatchOptions& options) {
   std::string error;
-  if (!options.IsValid(sys, &error)) throw std::invalid_argument("batch: " + error);
-  if (params0.size() != sys.num_params()) {
-    throw std::invalid_argument("batch: initial guess has " + std::to_string(params0.size()) +
-                                " parameters, system has " + std::to_string(sys.num_params()));
+  BatchResult invalid;
+  if (!options.IsValid(sys, &error)) {
+    invalid.status = Status::Error("batch: " + error);
+    return invalid;
+  }
+  if (params0.size() != sys.num_params() || !params0.allFinite()) {
+    invalid.status = Status::Error("batch: the initial guess has " +
+                                   std::to_string(params0.size()) + " parameters, the system " +
+                                   std::to_string(sys.num_params()) + ", all finite expected");
+    return invalid;
+  }
+  if (Status s = CheckMeasurements(meas); !s.ok()) {
+    invalid.status = Status::Error("batch: " + s.message());
+    return invalid;
   }
   Problem pb;
   pb.params = params0;
@@ -345,14 +369,23 @@ BatchResult BoundAt(const System& sys, const ControlSignal& controls,
                     const std::vector<Eigen::Vector3d>& segment_start_true,
                     const BatchOptions& options) {
   std::string error;
-  if (!options.IsValid(sys, &error)) throw std::invalid_argument("bound: " + error);
+  BatchResult invalid;
+  if (!options.IsValid(sys, &error)) {
+    invalid.status = Status::Error("bound: " + error);
+    return invalid;
+  }
+  if (Status s = CheckMeasurements(meas); !s.ok()) {
+    invalid.status = Status::Error("bound: " + s.message());
+    return invalid;
+  }
   Problem pb;
   pb.params = params_true;
   Build(sys, controls, meas, options, &pb);
   if (segment_start_true.size() != pb.starts.size()) {
-    throw std::invalid_argument("bound: " + std::to_string(segment_start_true.size()) +
-                                " start poses for " + std::to_string(pb.starts.size()) +
-                                " segments");
+    invalid.status =
+        Status::Error("bound: " + std::to_string(segment_start_true.size()) + " start poses for " +
+                      std::to_string(pb.starts.size()) + " segments");
+    return invalid;
   }
   for (size_t g = 0; g < pb.starts.size(); ++g) {
     pb.starts[g] = {segment_start_true[g].x(), segment_start_true[g].y(),

@@ -79,5 +79,36 @@ TEST(Batch, RecoversTheTruthWithin3SigmaFromAStart5PercentOff) {
   }
 }
 
+// Bad data is a status naming the problem, never an exception (callers used to catch any
+// std::exception as "the fit failed").
+TEST(Batch, BadInputsAreStatusesThatSayWhatIsWrong) {
+  const System sys = MakeSystem("diffdrive");
+  const auto sc = AllModelScenarios()[0];
+  const VecN<kMaxState> truth = testing::ToVec(sc.truth);
+  std::mt19937_64 rng(3);
+  const auto d = testing::Simulate(sys, truth, sc.lo, sc.hi, 5.0, 10.0,
+                                   Eigen::Vector3d(0.002, 0.002, 0.01), rng);
+  const Eigen::VectorXd guess = truth.cast<double>();
+  auto fit = [&](std::vector<PoseMeasurement> meas, const Eigen::VectorXd& p0) {
+    BatchResult r;
+    EXPECT_NO_THROW(r = FitBatch(sys, d.controls, meas, p0, {}));
+    EXPECT_FALSE(r.status.ok());
+    return r.status.message();
+  };
+  EXPECT_EQ(fit({}, guess), "batch: no pose measurements");
+  auto backwards = d.meas;
+  std::swap(backwards[3].t_ns, backwards[4].t_ns);
+  backwards[3].segment = backwards[4].segment = 0;
+  for (auto& m : backwards) m.segment = 0;
+  EXPECT_EQ(fit(backwards, guess), "batch: measurement times go backwards within segment 0");
+  auto singular = d.meas;
+  singular[2].R = Eigen::Matrix3d::Zero();
+  EXPECT_EQ(fit(singular, guess), "batch: measurement 2: covariance is not positive definite");
+  EXPECT_EQ(fit(d.meas, guess.head(2)),
+            "batch: the initial guess has 2 parameters, the system 3, all finite expected");
+  // The same data, well formed, fits.
+  EXPECT_TRUE(FitBatch(sys, d.controls, d.meas, guess, {}).status.ok());
+}
+
 }  // namespace
 }  // namespace kincal

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "kincal/control_signal.h"
+#include "kincal/status.h"
 #include "kincal/system.h"
 #include "kincal/time.h"
 
@@ -57,6 +58,9 @@ struct BatchOptions {
 };
 
 struct BatchResult {
+  // Not ok when the inputs cannot be fitted (no measurements, times going backwards, a
+  // covariance that is not positive definite, a guess of the wrong size); the rest is empty.
+  Status status;
   Eigen::VectorXd params;      // estimate over all System params
   Eigen::MatrixXd covariance;  // their covariance (empty if not computed / singular)
   std::vector<Eigen::Vector3d> segment_start;  // reference pose at each segment start
@@ -82,7 +86,8 @@ struct BatchResult {
 };
 
 // Fits the parameters. `params0` is the initial guess over all System params. Measurements
-// must be sorted by time within each segment.
+// must be sorted by time within each segment; bad inputs give a result whose status says
+// what is wrong.
 BatchResult FitBatch(const System& sys, const ControlSignal& controls,
                      std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params0,
                      const BatchOptions& options);
