@@ -12,8 +12,11 @@
 // belong to the model). The simulator and all estimators use effects only through
 // `System`, so an effect written once is simulated, filtered and batch-fitted alike.
 //
-// Adding an effect: one file in src/effects/ deriving EffectImpl<Self>, overriding the
-// hooks of its stage as templates, and one `KINCAL_REGISTER_EFFECT(Self)` line.
+// Adding an effect: one file in src/core/effects/ deriving EffectImpl<Self>, overriding
+// the hooks of its stage as templates, declaring its residual signature, and one
+// `KINCAL_REGISTER_EFFECT(Self)` line; then that file's line in CMakeLists.txt's source
+// list, whose order is the registry's (analyze tries candidates in it; the online check
+// names the first effect whose signature fits).
 #pragma once
 
 #include <functional>

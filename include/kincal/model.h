@@ -7,8 +7,9 @@
 // map plus its metadata. Every model is evaluated for double and for the autodiff Jet
 // (EKF Jacobians, Ceres batch), which `ModelImpl` wires up from one template.
 //
-// Adding a model: one file in src/models/ with a class deriving ModelImpl<Self> and a
-// `KINCAL_REGISTER_MODEL(Self)` line. Nothing else changes.
+// Adding a model: one file in src/core/models/ with a class deriving ModelImpl<Self> and a
+// `KINCAL_REGISTER_MODEL(Self)` line, and that file's line in CMakeLists.txt's source list
+// (whose order is the registry's). Nothing else changes.
 #pragma once
 
 #include <functional>
