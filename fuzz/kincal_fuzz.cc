@@ -69,7 +69,7 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("log.lcm", data, size);
   Expect([&] { kincal::ReadLcmLog(path, Diffdrive()); });
   kincal::daemon::DaemonConfig c;
-  c.source = SourceKind::kReplay;
+  c.source = kincal::daemon::SourceKind::kReplay;
   c.replay.path = path;
   c.replay.speed = 0;
   Expect([&] {
@@ -78,7 +78,7 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
     auto src = kincal::daemon::MakeReplaySource(c, [&](const void* d, size_t n, int64_t t) {
       kincal::daemon::DecodeControls(d, n, Diffdrive(), false, t, &s, &why);
     });
-    src->Start();
+    if (!src->Start().ok()) return 0;
     kincal::daemon::Frame f;
     cv::Mat grey;
     std::string error;

@@ -177,15 +177,16 @@ struct Daemon::Impl {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
       }
       if (stop.load()) return false;
-      std::string error;
-      if (source->Reopen(&error)) {
+      const Status reopened = source->Reopen();
+      if (reopened.ok()) {
         counters.source_restarts.fetch_add(1);
         SetSourceError("");
         spdlog::info("source {}: reopened, capturing again", source->name());
         return true;
       }
       wait_s = std::min(kReopenMaxWaitS, 2 * wait_s);
-      SetSourceError(error + " (retrying every " + std::to_string(wait_s).substr(0, 4) + " s)");
+      SetSourceError(reopened.message() + " (retrying every " +
+                     std::to_string(wait_s).substr(0, 4) + " s)");
     }
     return false;
   }
@@ -414,7 +415,11 @@ void Daemon::Stop() { impl_->stop.store(true); }
 
 int Daemon::Run() {
   Impl& d = *impl_;
-  d.source->Start();
+  if (const Status started = d.source->Start(); !started.ok()) {
+    spdlog::error("{}", started.message());
+    d.SetSourceError(started.message());
+    return 1;
+  }
   d.last_frame_mono.store(MonotonicNs());
   spdlog::info("kincald: source {}, model {}{}, filter {}, LCM {}{}", d.source->name(),
                d.cfg.robot.model, d.cfg.robot.effects.empty() ? "" : " + effects",

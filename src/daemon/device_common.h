@@ -30,18 +30,12 @@ class SequenceGaps {
   bool have_last_ = false;
 };
 
-// Closes a device and starts it again; false with the reason in *error when it is still
-// not there (`start` throws SourceError naming the device and what failed).
-inline bool ReopenDevice(const std::function<void()>& close, const std::function<void()>& start,
-                         std::string* error) {
+// Closes a device and starts it again; the start's status (an error while the device is
+// still not there).
+inline Status ReopenDevice(const std::function<void()>& close,
+                           const std::function<Status()>& start) {
   close();
-  try {
-    start();
-    return true;
-  } catch (const SourceError& e) {
-    *error = e.what();
-    return false;
-  }
+  return start();
 }
 
 }  // namespace kincal::daemon

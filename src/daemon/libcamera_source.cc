@@ -3,6 +3,7 @@
 #include <libcamera/libcamera.h>
 #include <sys/mman.h>
 
+#include <cerrno>
 #include <condition_variable>
 #include <cstring>
 #include <deque>
@@ -25,69 +26,26 @@ class LibcameraSource final : public FrameSource {
   }
   SourceCapabilities capabilities() const override { return {.can_reopen = true}; }
 
-  void Start() override {
-    cm_ = std::make_unique<lc::CameraManager>();
-    if (cm_->start() != 0) throw SourceError("libcamera: camera manager failed to start");
-    const auto cams = cm_->cameras();
-    if (cams.empty()) throw SourceError("libcamera: no cameras found");
-    camera_ = opt_.camera.empty() ? cams.front() : cm_->get(opt_.camera);
-    if (!camera_) {
-      std::string ids;
-      for (const auto& c : cams) ids += (ids.empty() ? "" : ", ") + c->id();
-      throw SourceError("libcamera: no camera '" + opt_.camera + "' (found: " + ids + ")");
-    }
-    id_ = camera_->id();
-    if (camera_->acquire() != 0) throw SourceError("libcamera: camera " + id_ + " is in use");
-    acquired_ = true;
-    config_ = camera_->generateConfiguration({lc::StreamRole::Viewfinder});
-    if (!config_ || config_->empty())
-      throw SourceError("libcamera: " + id_ + ": no stream configuration");
-    lc::StreamConfiguration& sc = config_->at(0);
-    const PixelFormat want = opt_.pixel_format;
-    const lc::PixelFormat pf = want == PixelFormat::kGrey    ? lc::formats::R8
-                               : want == PixelFormat::kYuyv  ? lc::formats::YUYV
-                               : want == PixelFormat::kMjpeg ? lc::formats::MJPEG
-                               : want == PixelFormat::kBgr24 ? lc::formats::RGB888
-                                                             : lc::formats::BGR888;
-    sc.pixelFormat = pf;
-    sc.size = lc::Size(static_cast<unsigned>(opt_.width), static_cast<unsigned>(opt_.height));
-    sc.bufferCount = static_cast<unsigned>(opt_.buffers);
-    if (config_->validate() == lc::CameraConfiguration::Invalid) {
-      throw SourceError("libcamera: " + id_ + ": configuration invalid");
-    }
-    if (sc.pixelFormat != pf || sc.size.width != static_cast<unsigned>(opt_.width) ||
-        sc.size.height != static_cast<unsigned>(opt_.height)) {
-      throw SourceError("libcamera: " + id_ + ": asked for " + std::string(PixelFormatName(want)) +
-                        " " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
-                        ", the camera offers " + sc.toString());
-    }
-    if (camera_->configure(config_.get()) != 0)
-      throw SourceError("libcamera: " + id_ + ": configure failed");
-    format_ = want;
-    width_ = static_cast<int>(sc.size.width);
-    height_ = static_cast<int>(sc.size.height);
-    stride_ = static_cast<int>(sc.stride);
-    stream_ = sc.stream();
-    allocator_ = std::make_unique<lc::FrameBufferAllocator>(camera_);
-    if (allocator_->allocate(stream_) < 0)
-      throw SourceError("libcamera: " + id_ + ": buffer allocation failed");
-    for (const auto& buffer : allocator_->buffers(stream_)) {
-      const auto& plane = buffer->planes()[0];
-      size_t length = 0;
-      for (const auto& p : buffer->planes()) length = std::max<size_t>(length, p.offset + p.length);
-      void* map = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, plane.fd.get(), 0);
-      if (map == MAP_FAILED) throw SourceError("libcamera: " + id_ + ": mmap failed");
-      maps_[buffer.get()] = {static_cast<uint8_t*>(map), length};
-      auto request = camera_->createRequest();
-      if (!request || request->addBuffer(stream_, buffer.get()) != 0) {
-        throw SourceError("libcamera: " + id_ + ": cannot create a request");
+  // Finds, acquires, configures and starts the camera; on an error the camera is released
+  // and the status names the camera, the step and (where libcamera returns one) errno's
+  // text.
+  Status Start() override {
+    Close();
+    for (Status (LibcameraSource::*step)() :
+         {&LibcameraSource::Acquire, &LibcameraSource::Configure, &LibcameraSource::MapBuffers}) {
+      if (Status s = (this->*step)(); !s.ok()) {
+        Close();
+        return s;
       }
-      requests_.push_back(std::move(request));
     }
     camera_->requestCompleted.connect(this, &LibcameraSource::OnComplete);
-    if (camera_->start() != 0) throw SourceError("libcamera: " + id_ + ": start failed");
+    if (const int ret = camera_->start(); ret != 0) {
+      Close();
+      return Failed("start", ret);
+    }
     started_ = true;
     for (auto& r : requests_) camera_->queueRequest(r.get());
+    return {};
   }
 
   SourceStatus Next(Frame* f, int timeout_ms, std::string* error) override {
@@ -136,18 +94,102 @@ class LibcameraSource final : public FrameSource {
     cv_.notify_all();
   }
   int64_t device_drops() const override { return gaps_.drops(); }
-  bool Reopen(std::string* error) override {
+  Status Reopen() override {
     auto close = [this] {
       Close();
       std::lock_guard lock(mu_);
       done_.clear();
       gaps_.Restart();
     };
-    return ReopenDevice(
-        close, [this] { Start(); }, error);
+    return ReopenDevice(close, [this] { return Start(); });
   }
 
  private:
+  // libcamera's calls return 0 or a negative errno.
+  Status Failed(const std::string& what, int ret) const {
+    return Status::Error("libcamera: " + (id_.empty() ? opt_.camera : id_) + ": " + what +
+                         " failed" + (ret < 0 ? std::string(": ") + std::strerror(-ret) : ""));
+  }
+
+  Status Acquire() {
+    cm_ = std::make_unique<lc::CameraManager>();
+    if (const int ret = cm_->start(); ret != 0) return Failed("camera manager start", ret);
+    const auto cams = cm_->cameras();
+    if (cams.empty()) return Status::Error("libcamera: no cameras found");
+    camera_ = opt_.camera.empty() ? cams.front() : cm_->get(opt_.camera);
+    if (!camera_) {
+      std::string ids;
+      for (const auto& c : cams) ids += (ids.empty() ? "" : ", ") + c->id();
+      return Status::Error("libcamera: no camera '" + opt_.camera + "' (found: " + ids + ")");
+    }
+    id_ = camera_->id();
+    if (const int ret = camera_->acquire(); ret != 0) return Failed("acquire (in use?)", ret);
+    acquired_ = true;
+    return {};
+  }
+
+  // The requested pixel format and size; a camera that adjusts either is refused.
+  Status Configure() {
+    config_ = camera_->generateConfiguration({lc::StreamRole::Viewfinder});
+    if (!config_ || config_->empty()) {
+      return Status::Error("libcamera: " + id_ + ": no stream configuration");
+    }
+    lc::StreamConfiguration& sc = config_->at(0);
+    const PixelFormat want = opt_.pixel_format;
+    const lc::PixelFormat pf = want == PixelFormat::kGrey    ? lc::formats::R8
+                               : want == PixelFormat::kYuyv  ? lc::formats::YUYV
+                               : want == PixelFormat::kMjpeg ? lc::formats::MJPEG
+                               : want == PixelFormat::kBgr24 ? lc::formats::RGB888
+                                                             : lc::formats::BGR888;
+    sc.pixelFormat = pf;
+    sc.size = lc::Size(static_cast<unsigned>(opt_.width), static_cast<unsigned>(opt_.height));
+    sc.bufferCount = static_cast<unsigned>(opt_.buffers);
+    if (config_->validate() == lc::CameraConfiguration::Invalid) {
+      return Status::Error("libcamera: " + id_ + ": configuration invalid");
+    }
+    if (sc.pixelFormat != pf || sc.size.width != static_cast<unsigned>(opt_.width) ||
+        sc.size.height != static_cast<unsigned>(opt_.height)) {
+      return Status::Error("libcamera: " + id_ + ": asked for " +
+                           std::string(PixelFormatName(want)) + " " + std::to_string(opt_.width) +
+                           "x" + std::to_string(opt_.height) + ", the camera offers " +
+                           sc.toString());
+    }
+    if (const int ret = camera_->configure(config_.get()); ret != 0) {
+      return Failed("configure", ret);
+    }
+    format_ = want;
+    width_ = static_cast<int>(sc.size.width);
+    height_ = static_cast<int>(sc.size.height);
+    stride_ = static_cast<int>(sc.stride);
+    stream_ = sc.stream();
+    return {};
+  }
+
+  // Buffers allocated, mapped once, one request each.
+  Status MapBuffers() {
+    allocator_ = std::make_unique<lc::FrameBufferAllocator>(camera_);
+    if (const int ret = allocator_->allocate(stream_); ret < 0) {
+      return Failed("buffer allocation", ret);
+    }
+    for (const auto& buffer : allocator_->buffers(stream_)) {
+      const auto& plane = buffer->planes()[0];
+      size_t length = 0;
+      for (const auto& p : buffer->planes()) length = std::max<size_t>(length, p.offset + p.length);
+      void* map = ::mmap(nullptr, length, PROT_READ, MAP_SHARED, plane.fd.get(), 0);
+      if (map == MAP_FAILED) {
+        return Status::Error("libcamera: " + id_ + ": mmap failed: " + std::strerror(errno));
+      }
+      maps_[buffer.get()] = {static_cast<uint8_t*>(map), length};
+      auto request = camera_->createRequest();
+      if (!request) return Status::Error("libcamera: " + id_ + ": cannot create a request");
+      if (const int ret = request->addBuffer(stream_, buffer.get()); ret != 0) {
+        return Failed("adding a buffer to a request", ret);
+      }
+      requests_.push_back(std::move(request));
+    }
+    return {};
+  }
+
   void OnComplete(lc::Request* r) {
     if (r->status() == lc::Request::RequestCancelled) return;
     std::lock_guard lock(mu_);

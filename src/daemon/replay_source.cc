@@ -22,17 +22,20 @@ class ReplaySource final : public FrameSource {
       : cfg_(c), intake_(std::move(controls)) {
     struct stat st {};
     if (::stat(c.replay.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-      throw SourceError(c.replay.path + ": cannot open log for replay (no such file)");
+      throw std::runtime_error(c.replay.path + ": cannot open log for replay (no such file)");
     }
     try {
       log_.emplace(c.replay.path);
     } catch (const std::runtime_error& e) {
-      throw SourceError(e.what());
+      throw std::runtime_error(e.what());
     }
   }
   ~ReplaySource() override { ReportDamage(); }
   std::string name() const override { return "replay(" + cfg_.replay.path + ")"; }
-  void Start() override { start_mono_ = MonotonicNs(); }
+  Status Start() override {
+    start_mono_ = MonotonicNs();
+    return {};
+  }
   void Stop() override { stopped_ = true; }
   SourceCapabilities capabilities() const override {
     return {.lossless = cfg_.replay.speed <= 0,

@@ -28,15 +28,15 @@ class SimSource final : public FrameSource {
         rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
         fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
     if (sc_.model != c.robot.model) {
-      throw SourceError(c.sim.scenario + ": scenario model '" + sc_.model +
-                        "' differs from robot.model '" + c.robot.model + "' in " +
-                        (c.file.empty() ? "the config" : c.file));
+      throw std::runtime_error(c.sim.scenario + ": scenario model '" + sc_.model +
+                               "' differs from robot.model '" + c.robot.model + "' in " +
+                               (c.file.empty() ? "the config" : c.file));
     }
     const int nc = truth_.num_controls();
     if (static_cast<int>(sc_.control_low.size()) != nc ||
         static_cast<int>(sc_.control_high.size()) != nc) {
-      throw SourceError(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
-                        " values");
+      throw std::runtime_error(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
+                               " values");
     }
     p_true_ = ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth");
     const double duration = c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s;
@@ -49,7 +49,7 @@ class SimSource final : public FrameSource {
       AppendPiecewiseRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s,
                             3.0 * sc_.min_period_s, rng_);
     } else {
-      throw SourceError(c.sim.scenario + ": controls.profile must be smooth or piecewise");
+      throw std::runtime_error(c.sim.scenario + ": controls.profile must be smooth or piecewise");
     }
     times_ = FrameTimes(0, t1, sc_.camera, rng_);
     x_ = truth_.MakeState(0.0, 0.0, Heading(), p_true_, cmd_, 0.0);
@@ -64,9 +64,10 @@ class SimSource final : public FrameSource {
   }
 
   std::string name() const override { return "sim(" + cfg_.sim.scenario + ")"; }
-  void Start() override {
+  Status Start() override {
     start_utime_ = RealtimeUtime();
     start_mono_ = MonotonicNs();
+    return {};
   }
   void Stop() override { stopped_ = true; }
   SourceCapabilities capabilities() const override {

@@ -56,18 +56,19 @@ class V4l2Source final : public FrameSource {
   SourceCapabilities capabilities() const override { return {.can_reopen = true}; }
 
   // Opens the device and starts streaming; a device already open is closed first (a
-  // second Start() restarts it). Throws SourceError naming the device, the step that
-  // failed and errno's text.
-  void Start() override {
+  // second Start() restarts it). An error names the device, the step that failed and
+  // errno's text; the device is closed again.
+  Status Start() override {
     Close();
-    Open();
-    SetFormat();
-    SetFrameRate();
-    SetControls();
-    MapBuffers();
+    for (Status (V4l2Source::*step)() :
+         {&V4l2Source::Open, &V4l2Source::SetFormat, &V4l2Source::SetFrameRate,
+          &V4l2Source::SetControls, &V4l2Source::MapBuffers}) {
+      if (Status s = (this->*step)(); !s.ok()) return s;
+    }
     v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    if (Ioctl(fd_, VIDIOC_STREAMON, &type) != 0) Fail("VIDIOC_STREAMON");
+    if (Ioctl(fd_, VIDIOC_STREAMON, &type) != 0) return Fail("VIDIOC_STREAMON");
     streaming_ = true;
+    return {};
   }
 
   SourceStatus Next(Frame* f, int timeout_ms, std::string* error) override {
@@ -128,30 +129,30 @@ class V4l2Source final : public FrameSource {
   // Called from another thread: the capture thread closes the device on its next Next().
   void Stop() override { stop_.store(true); }
   int64_t device_drops() const override { return gaps_.drops(); }
-  bool Reopen(std::string* error) override {
+  Status Reopen() override {
     auto close = [this] {
       Close();
       gaps_.Restart();
     };
-    return ReopenDevice(
-        close, [this] { Start(); }, error);
+    return ReopenDevice(close, [this] { return Start(); });
   }
 
  private:
-  void Open() {
+  Status Open() {
     fd_ = ::open(opt_.device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
-    if (fd_ < 0) throw SourceError(opt_.device + ": cannot open: " + std::strerror(errno));
+    if (fd_ < 0) return Status::Error(opt_.device + ": cannot open: " + std::strerror(errno));
     v4l2_capability cap{};
-    if (Ioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) Fail("VIDIOC_QUERYCAP (not a V4L2 device?)");
+    if (Ioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0) return Fail("VIDIOC_QUERYCAP (not a V4L2 device?)");
     const uint32_t caps =
         (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
-    if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) Refuse("not a video capture device");
-    if (!(caps & V4L2_CAP_STREAMING)) Refuse("does not support streaming I/O");
+    if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) return Refuse("not a video capture device");
+    if (!(caps & V4L2_CAP_STREAMING)) return Refuse("does not support streaming I/O");
     card_ = reinterpret_cast<const char*>(cap.card);
+    return {};
   }
 
   // The requested size and pixel format; a driver that adjusts either is refused.
-  void SetFormat() {
+  Status SetFormat() {
     const PixelFormat want = opt_.pixel_format;
     const std::string want_name(PixelFormatName(want));
     const uint32_t fourcc = want == PixelFormat::kGrey   ? V4L2_PIX_FMT_GREY
@@ -163,23 +164,25 @@ class V4l2Source final : public FrameSource {
     fmt.fmt.pix.height = static_cast<uint32_t>(opt_.height);
     fmt.fmt.pix.pixelformat = fourcc;
     fmt.fmt.pix.field = V4L2_FIELD_NONE;
-    if (Ioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) Fail("VIDIOC_S_FMT " + want_name);
+    if (Ioctl(fd_, VIDIOC_S_FMT, &fmt) != 0) return Fail("VIDIOC_S_FMT " + want_name);
     if (fmt.fmt.pix.pixelformat != fourcc) {
-      Refuse("does not offer " + want_name + " (it offers " + FourCc(fmt.fmt.pix.pixelformat) +
-             "); set v4l2.pixel_format");
+      return Refuse("does not offer " + want_name + " (it offers " +
+                    FourCc(fmt.fmt.pix.pixelformat) + "); set v4l2.pixel_format");
     }
     format_ = want;
     width_ = static_cast<int>(fmt.fmt.pix.width);
     height_ = static_cast<int>(fmt.fmt.pix.height);
     stride_ = static_cast<int>(fmt.fmt.pix.bytesperline);
     if (width_ != opt_.width || height_ != opt_.height) {
-      Refuse("asked for " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
-             ", the driver offers " + std::to_string(width_) + "x" + std::to_string(height_));
+      return Refuse("asked for " + std::to_string(opt_.width) + "x" + std::to_string(opt_.height) +
+                    ", the driver offers " + std::to_string(width_) + "x" +
+                    std::to_string(height_));
     }
+    return {};
   }
 
   // Not every driver can set its rate: then the driver's own rate stands.
-  void SetFrameRate() {
+  Status SetFrameRate() {
     v4l2_streamparm parm{};
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     parm.parm.capture.timeperframe.numerator = 1000;
@@ -191,44 +194,46 @@ class V4l2Source final : public FrameSource {
     } else {
       frame_period_ns_ = static_cast<TimeNs>(1e9 / opt_.fps);
     }
+    return {};
   }
 
   // At least four mmap buffers, all queued.
-  void MapBuffers() {
+  Status MapBuffers() {
     v4l2_requestbuffers req{};
     req.count = static_cast<uint32_t>(opt_.buffers);
     req.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     req.memory = V4L2_MEMORY_MMAP;
-    if (Ioctl(fd_, VIDIOC_REQBUFS, &req) != 0) Fail("VIDIOC_REQBUFS (mmap)");
-    if (req.count < 4) Refuse("only " + std::to_string(req.count) + " buffers (need >= 4)");
+    if (Ioctl(fd_, VIDIOC_REQBUFS, &req) != 0) return Fail("VIDIOC_REQBUFS (mmap)");
+    if (req.count < 4) return Refuse("only " + std::to_string(req.count) + " buffers (need >= 4)");
     buffers_.resize(req.count);
     for (uint32_t i = 0; i < req.count; ++i) {
       v4l2_buffer b{};
       b.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
       b.memory = V4L2_MEMORY_MMAP;
       b.index = i;
-      if (Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0) Fail("VIDIOC_QUERYBUF");
+      if (Ioctl(fd_, VIDIOC_QUERYBUF, &b) != 0) return Fail("VIDIOC_QUERYBUF");
       void* p = ::mmap(nullptr, b.length, PROT_READ | PROT_WRITE, MAP_SHARED, fd_, b.m.offset);
-      if (p == MAP_FAILED) Fail("mmap");
+      if (p == MAP_FAILED) return Fail("mmap");
       buffers_[i] = {p, b.length};
-      if (Ioctl(fd_, VIDIOC_QBUF, &b) != 0) Fail("VIDIOC_QBUF");
+      if (Ioctl(fd_, VIDIOC_QBUF, &b) != 0) return Fail("VIDIOC_QBUF");
     }
+    return {};
   }
 
-  // A failed system call: closes the device, throws with errno's text.
-  [[noreturn]] void Fail(const std::string& what) {
+  // A failed system call: closes the device; the error names it with errno's text.
+  Status Fail(const std::string& what) {
     const std::string msg = opt_.device + ": " + what + " failed: " + std::strerror(errno);
     Close();
-    throw SourceError(msg);
+    return Status::Error(msg);
   }
   // The device works but cannot do what was asked.
-  [[noreturn]] void Refuse(const std::string& why) {
+  Status Refuse(const std::string& why) {
     Close();
-    throw SourceError(opt_.device + ": " + why);
+    return Status::Error(opt_.device + ": " + why);
   }
 
-  void SetControls() {
-    if (opt_.controls.empty()) return;
+  Status SetControls() {
+    if (opt_.controls.empty()) return {};
     std::map<std::string, v4l2_query_ext_ctrl> found;
     v4l2_query_ext_ctrl q{};
     q.id = V4L2_CTRL_FLAG_NEXT_CTRL | V4L2_CTRL_FLAG_NEXT_COMPOUND;
@@ -242,16 +247,17 @@ class V4l2Source final : public FrameSource {
       if (it == found.end()) {
         std::string names;
         for (const auto& [k, _] : found) names += (names.empty() ? "" : ", ") + k;
-        Refuse("no control '" + key + "' (it has: " + names + ")");
+        return Refuse("no control '" + key + "' (it has: " + names + ")");
       }
       const auto& qc = it->second;
       if (value < qc.minimum || value > qc.maximum) {
-        Refuse("control '" + key + "' = " + std::to_string(value) + " outside [" +
-               std::to_string(qc.minimum) + ", " + std::to_string(qc.maximum) + "]");
+        return Refuse("control '" + key + "' = " + std::to_string(value) + " outside [" +
+                      std::to_string(qc.minimum) + ", " + std::to_string(qc.maximum) + "]");
       }
       v4l2_control ctl{qc.id, static_cast<int32_t>(value)};
-      if (Ioctl(fd_, VIDIOC_S_CTRL, &ctl) != 0) Fail("setting control '" + key + "'");
+      if (Ioctl(fd_, VIDIOC_S_CTRL, &ctl) != 0) return Fail("setting control '" + key + "'");
     }
+    return {};
   }
 
   void Close() {

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
 #include "kincal/time.h"
 #include "kincal/types.h"
 
@@ -89,27 +90,21 @@ struct SourceCapabilities {
   bool can_reopen = false;                // a device that can be opened again after an error
 };
 
-// Something that supplies frames. Start() may throw SourceError with a message naming
-// the device and what failed; Next() reports errors through `error`.
-class SourceError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+// Something that supplies frames. Start() and Reopen() return a status naming the device,
+// the step that failed and, for a failed system call, errno's text; Next() reports errors
+// through `error`.
 
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
   virtual std::string name() const = 0;
-  virtual void Start() = 0;
+  virtual Status Start() = 0;
   // Fills *f (reusing its buffer) or times out after timeout_ms.
   virtual SourceStatus Next(Frame* f, int timeout_ms, std::string* error) = 0;
   virtual void Stop() = 0;
-  // After an error: close and open the device again. False (with *error) if it is still
-  // not there; sources that cannot reopen return false.
-  virtual bool Reopen(std::string* error) {
-    *error = name() + " cannot be reopened";
-    return false;
-  }
+  // After an error: close and open the device again; an error while it is still not
+  // there. Sources that cannot reopen say so.
+  virtual Status Reopen() { return Status::Error(name() + " cannot be reopened"); }
   // Frames the device itself lost (sequence gaps).
   virtual int64_t device_drops() const { return 0; }
   // Input the source could not use (undecodable log events).
