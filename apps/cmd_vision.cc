@@ -12,9 +12,9 @@
 
 #include "board.h"
 #include "commands.h"
-#include "kincal/vision/config.h"
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
+#include "kincal/vision/setup_files.h"
 
 namespace kincal::app {
 namespace {

@@ -35,7 +35,7 @@
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
 #include "kincal/scenario.h"
-#include "kincal/vision/config.h"
+#include "kincal/vision/setup_files.h"
 
 namespace {
 

@@ -27,7 +27,7 @@
 #include "daemon/sources.h"
 #include "kincal/angles.h"
 #include "kincal/daemon/daemon.h"
-#include "kincal/vision/config.h"
+#include "kincal/vision/setup_files.h"
 #include "kincal/vision/target.h"
 
 namespace kincal::daemon {

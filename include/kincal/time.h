@@ -3,7 +3,10 @@
 // All times inside kincal are int64_t nanoseconds. Which clock a value is on is part of
 // its name or comment:
 //   - *_mono_ns : CLOCK_MONOTONIC of the daemon host (the daemon's internal clock)
-//   - *_utime   : microseconds of the host realtime clock (LCM convention)
+//   - *_utime   : microseconds on the realtime epoch (LCM convention). In kincald these are
+//                 pipeline stamps: CLOCK_MONOTONIC mapped onto the realtime epoch once
+//                 per process (daemon/sources.h), so an NTP step does not move them;
+//                 only health_t.utime is read from the host realtime clock itself
 //   - *_dev_ns  : a device's own clock (camera, robot)
 //   - t_ns      : a recording's time base (CSV files: seconds, converted once on read)
 // Conversion happens once, at the edge where data enters or leaves.

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include "kincal/daemon/frame.h"
+#include "kincal/daemon/samples.h"
 #include "kincal/model.h"
 
 namespace kincal::daemon {

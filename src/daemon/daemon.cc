@@ -403,7 +403,7 @@ Daemon::Daemon(DaemonConfig config) {
         +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Impl* self) {
           // Receive stamp on the pipeline's time base (monotonic, mapped once): an NTP step of
           // the realtime clock does not make controls jump against frames.
-          self->OnControls(rbuf->data, rbuf->data_size, MonotonicToUtime(MonotonicNs()));
+          self->OnControls(rbuf->data, rbuf->data_size, PipelineUtime(MonotonicNs()));
         },
         &d);
   }

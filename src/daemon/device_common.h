@@ -7,7 +7,7 @@
 #include <functional>
 #include <string>
 
-#include "kincal/daemon/frame.h"
+#include "kincal/daemon/frame_source.h"
 
 namespace kincal::daemon {
 

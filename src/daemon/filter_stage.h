@@ -22,6 +22,7 @@
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/daemon/samples.h"
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/system.h"
 

@@ -81,7 +81,7 @@ class LibcameraSource final : public FrameSource {
     f->height = height_;
     f->stride = stride_;
     f->format = format_;
-    f->utime = MonotonicToUtime(stamp > 0 ? stamp : arrival);
+    f->utime = PipelineUtime(stamp > 0 ? stamp : arrival);
     f->device_utime = stamp / 1000;
     f->sequence = md.sequence;
     f->arrival_mono_ns = arrival;

@@ -16,6 +16,7 @@
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/daemon/samples.h"
 #include "kincal/estimation/filter.h"
 #include "kincal/system.h"
 

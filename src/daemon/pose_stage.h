@@ -11,6 +11,7 @@
 #include "daemon/sources.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/daemon/samples.h"
 #include "kincal/vision/markers.h"
 
 namespace kincal::daemon {

@@ -65,7 +65,7 @@ class SimSource final : public FrameSource {
 
   std::string name() const override { return "sim(" + cfg_.sim.scenario + ")"; }
   Status Start() override {
-    start_utime_ = RealtimeUtime();
+    start_utime_ = PipelineUtime(MonotonicNs());
     start_mono_ = MonotonicNs();
     return {};
   }

@@ -5,7 +5,8 @@
 
 #include <stdexcept>
 
-#include "kincal/vision/config.h"
+#include "kincal/daemon/samples.h"
+#include "kincal/vision/setup_files.h"
 
 namespace kincal::daemon {
 
@@ -21,7 +22,7 @@ TimeNs MonotonicNs() {
   return static_cast<TimeNs>(ts.tv_sec) * kNsPerSecond + ts.tv_nsec;
 }
 
-int64_t MonotonicToUtime(TimeNs mono_ns) {
+int64_t PipelineUtime(TimeNs mono_ns) {
   // Offset realtime - monotonic, measured once (the tightest of a few readings). Later
   // steps of the realtime clock (NTP) do not move the pipeline's time base.
   static const int64_t offset_ns = [] {

@@ -5,7 +5,7 @@
 #include <memory>
 
 #include "kincal/daemon/config.h"
-#include "kincal/daemon/frame.h"
+#include "kincal/daemon/frame_source.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/pose.h"
 #include "kincal/vision/target.h"
@@ -46,10 +46,14 @@ std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
 std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
                                         ControlIntake controls, NetworkPublish publish);
 
-// Host realtime clock in microseconds, and CLOCK_MONOTONIC in nanoseconds.
+// The clocks (kincal/time.h):
+//   host realtime   CLOCK_REALTIME now, in us; it steps with NTP (health messages only);
+//   monotonic       CLOCK_MONOTONIC in ns (latency, pacing, timeouts);
+//   pipeline utime  CLOCK_MONOTONIC mapped onto the realtime epoch by an offset measured
+//                   once per process, in us: frame and receive stamps. It reads as
+//                   realtime, but an NTP step does not move it against the frames.
 int64_t RealtimeUtime();
 TimeNs MonotonicNs();
-// CLOCK_MONOTONIC ns -> host realtime us, through an offset measured once per process.
-int64_t MonotonicToUtime(TimeNs mono_ns);
+int64_t PipelineUtime(TimeNs mono_ns);
 
 }  // namespace kincal::daemon

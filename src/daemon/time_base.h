@@ -17,7 +17,7 @@
 #include <limits>
 #include <optional>
 
-#include "kincal/daemon/frame.h"
+#include "kincal/daemon/samples.h"
 #include "kincal/time.h"
 
 namespace kincal::daemon {

@@ -118,7 +118,7 @@ class V4l2Source final : public FrameSource {
     f->height = height_;
     f->stride = stride_;
     f->format = format_;
-    f->utime = MonotonicToUtime(exposure_ns);
+    f->utime = PipelineUtime(exposure_ns);
     f->device_utime = stamp_ns / 1000;
     f->sequence = b.sequence;
     f->arrival_mono_ns = arrival;

@@ -95,7 +95,7 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
     if (rec.controls.size() == before) ++stats.control_repeated_times;
   }
   for (const auto& [t, z] : poses) {
-    PoseSample s{SecondsToNs(t - rec.origin_s), Eigen::Vector3d(z.x(), z.y(), WrapAngle(z.z()))};
+    RecordedPose s{SecondsToNs(t - rec.origin_s), Eigen::Vector3d(z.x(), z.y(), WrapAngle(z.z()))};
     if (!rec.poses.empty() && rec.poses.back().t_ns == s.t_ns) {
       rec.poses.back() = s;
       ++stats.pose_repeated_times;

@@ -198,7 +198,7 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
     rec.warnings.push_back(m.str());
   }
   for (const auto& r : poses) {
-    PoseSample s{to_ns(r.t), Eigen::Vector3d(r.v[0], r.v[1], WrapAngle(r.v[2]))};
+    RecordedPose s{to_ns(r.t), Eigen::Vector3d(r.v[0], r.v[1], WrapAngle(r.v[2]))};
     if (!rec.poses.empty() && rec.poses.back().t_ns == s.t_ns) {
       rec.poses.back() = s;
       ++rec.stats.pose_repeated_times;

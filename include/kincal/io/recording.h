@@ -24,7 +24,8 @@ class RecordingError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-struct PoseSample {
+// A measured pose in a recording (CSV, MR.CLAM, LCM log).
+struct RecordedPose {
   TimeNs t_ns = 0;                              // recording time base
   Eigen::Vector3d z = Eigen::Vector3d::Zero();  // x (m), y (m), theta (rad)
 };
@@ -41,7 +42,7 @@ struct Recording {
   std::string source;      // human-readable origin ("file.csv + file.csv", "MR.CLAM robot 3")
   double origin_s = 0.0;   // file time of t_ns = 0
   ControlSignal controls;  // commanded controls, model's channel order
-  std::vector<PoseSample> poses;  // sorted by time, unique times
+  std::vector<RecordedPose> poses;  // sorted by time, unique times
   RecordingStats stats;
   std::vector<std::string> warnings;  // suspicious but readable input
 };

@@ -1,5 +1,5 @@
 // Target layout and floor extrinsics files.
-#include "kincal/vision/config.h"
+#include "kincal/vision/setup_files.h"
 
 #include <yaml-cpp/yaml.h>
 
