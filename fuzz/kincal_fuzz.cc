@@ -78,7 +78,7 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
     auto src = kincal::daemon::MakeReplaySource(c, [&](const void* d, size_t n, int64_t t) {
       kincal::daemon::DecodeControls(d, n, Diffdrive(), false, t, &s, &why);
     });
-    if (!src->Start().ok()) return 0;
+    if (!src->Start().ok()) return;
     kincal::daemon::Frame f;
     cv::Mat grey;
     std::string error;
