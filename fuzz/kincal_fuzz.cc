@@ -75,9 +75,10 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
   Expect([&] {
     kincal::daemon::ControlSample s;
     std::string why;
-    auto src = kincal::daemon::MakeReplaySource(c, [&](const void* d, size_t n, int64_t t) {
-      kincal::daemon::DecodeControls(d, n, Diffdrive(), false, t, &s, &why);
-    });
+    auto src =
+        kincal::daemon::MakeReplaySource(c.replay, c.lcm, [&](const void* d, size_t n, int64_t t) {
+          kincal::daemon::DecodeControls(d, n, Diffdrive(), false, t, &s, &why);
+        });
     if (!src->Start().ok()) return;
     kincal::daemon::Frame f;
     cv::Mat grey;

@@ -194,7 +194,7 @@ TEST(VmV4l2, PosesRenderedIntoVividComeBackThroughTheCaptureNode) {
   VividOutput output(out);
   auto source = MakeV4l2Source(cfg.v4l2);
   ASSERT_TRUE(source->Start().ok());
-  PoseStage stage(cfg, vis);
+  PoseStage stage(cfg.pose, cfg.detector, vis);
   std::mt19937_64 rng(5);
   vision::RenderOptions ro;
   ro.noise_sigma = 1.0;

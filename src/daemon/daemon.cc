@@ -193,7 +193,7 @@ struct Daemon::Impl {
 
   // ---- detection / pose thread --------------------------------------------------------
   void DetectionLoop() {
-    PoseStage stage(cfg, vis);
+    PoseStage stage(cfg.pose, cfg.detector, vis);
     Frame f;
     PoseSample p;
     kincal::pose_t pose_msg{};
@@ -251,15 +251,15 @@ struct Daemon::Impl {
   // controls up to its time are in, or the controls have ended, or (live) it has waited
   // robot.max_control_delay_s.
   void FilterLoop() {
-    FilterPrior prior = ConfiguredPrior(sys, cfg);
+    FilterPrior prior = ConfiguredPrior(sys, cfg.robot, cfg.file);
     if (resume) {
       const int matched = ResumeFrom(sys, *resume, &prior);
       spdlog::info("resumed {} of {} parameters from {} ({} updates)", matched, sys.num_params(),
                    cfg.checkpoint.resume, resume->update_count);
     }
     FilterStage stage(
-        sys, cfg, std::move(prior), [this](ControlSample* c) { return control_q.TryPop(*c); },
-        StageOutputs(), &counters);
+        sys, FilterStageOptionsFrom(cfg), std::move(prior),
+        [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters);
     PoseRing pending(static_cast<size_t>(std::max(4 * cfg.queues.poses, kMinPendingPoses)));
     const TimeNs max_delay_ns = SecondsToNs(cfg.robot.max_control_delay_s);
     const bool lossless = caps.lossless;

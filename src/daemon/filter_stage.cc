@@ -30,12 +30,12 @@ constexpr double kDivergedNisRatio = 10.0;
 
 }  // namespace
 
-FilterPrior ConfiguredPrior(const System& sys, const DaemonConfig& c) {
+FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const std::string& file) {
   const int np = sys.num_params();
-  FilterPrior p{ParamsFrom(sys, c.robot.guess, c.file + ": robot.guess"), StateMat::Zero(np, np)};
+  FilterPrior p{ParamsFrom(sys, robot.guess, file + ": robot.guess"), StateMat::Zero(np, np)};
   for (int i = 0; i < np; ++i) {
     const double s =
-        c.robot.guess_sigma_fraction *
+        robot.guess_sigma_fraction *
         std::max(std::abs(p.mean[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
     p.covariance(i, i) = s * s;
   }
@@ -57,31 +57,49 @@ int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior) {
   return matched;
 }
 
-FilterStage::FilterStage(const System& sys, const DaemonConfig& c, FilterPrior prior,
+FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
+  FilterStageOptions o;
+  o.filter = c.filter;
+  o.effects = c.robot.effects;
+  o.model_check_every_s = 1.0 / c.health_rate_hz;
+  o.checkpoint_path = c.checkpoint.path;
+  o.checkpoint_every_s = c.checkpoint.every_s;
+  return o;
+}
+
+bool FilterStageOptions::IsValid(std::string* error) const {
+  if (!filter.IsValid(error)) return false;
+  if (!(model_check_every_s > 0) || !(checkpoint_every_s > 0)) {
+    *error = "the model check and checkpoint periods must be > 0";
+    return false;
+  }
+  return true;
+}
+
+FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPrior prior,
                          std::function<bool(ControlSample*)> next_control, FilterOutputs outputs,
                          CounterSet* counters)
     : sys_(sys),
-      cfg_(c),
+      opt_(std::move(options)),
       prior_(std::move(prior)),
       prior_sigma_(prior_.covariance.diagonal().cwiseSqrt()),
       next_control_(std::move(next_control)),
       out_(std::move(outputs)),
       counters_(*counters),
-      max_gap_ns_(SecondsToNs(c.filter.max_pose_gap_s)),
-      params_every_ns_(c.filter.params_rate_hz > 0 ? SecondsToNs(1.0 / c.filter.params_rate_hz)
-                                                   : 0),
-      check_every_ns_(SecondsToNs(1.0 / c.health_rate_hz)),
-      checkpoint_every_ns_(SecondsToNs(c.checkpoint.every_s)),
-      batch_window_ns_(SecondsToNs(c.filter.batch_window_s)),
+      max_gap_ns_(SecondsToNs(opt_.filter.max_pose_gap_s)),
+      params_every_ns_(
+          opt_.filter.params_rate_hz > 0 ? SecondsToNs(1.0 / opt_.filter.params_rate_hz) : 0),
+      check_every_ns_(SecondsToNs(opt_.model_check_every_s)),
+      checkpoint_every_ns_(SecondsToNs(opt_.checkpoint_every_s)),
+      batch_window_ns_(SecondsToNs(opt_.filter.batch_window_s)),
       time_base_(max_gap_ns_),
       recent_(kRecentPoses) {
-  calibrator_options_.filter = c.filter.type;
+  const FilterOptions& f = opt_.filter;
+  calibrator_options_.filter = f.type;
   calibrator_options_.noise.control_psd =
-      c.filter.control_psd.empty()
-          ? std::vector<double>(static_cast<size_t>(sys.num_controls()), 0.0)
-          : c.filter.control_psd;
-  calibrator_options_.noise.pose_psd =
-      Eigen::Vector3d(c.filter.pose_psd[0], c.filter.pose_psd[1], c.filter.pose_psd[2]);
+      f.control_psd.empty() ? std::vector<double>(static_cast<size_t>(sys.num_controls()), 0.0)
+                            : f.control_psd;
+  calibrator_options_.noise.pose_psd = Eigen::Vector3d(f.pose_psd[0], f.pose_psd[1], f.pose_psd[2]);
 }
 
 FilterStage::~FilterStage() = default;
@@ -183,20 +201,20 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
   time_base_.PoseSeen(t);
   if (recent_.full()) recent_.pop();
   recent_.push(p);
-  cal_->controls().DiscardBefore(cal_->controls().ToSeconds(t) - cfg_.filter.control_history_s);
+  cal_->controls().DiscardBefore(cal_->controls().ToSeconds(t) - opt_.filter.control_history_s);
   PublishParams(t, false);
   if (t - last_check_ns_ >= check_every_ns_) PublishModelCheck(t);
-  if (!cfg_.checkpoint.path.empty() && t - last_checkpoint_ns_ >= checkpoint_every_ns_) {
+  if (!opt_.checkpoint_path.empty() && t - last_checkpoint_ns_ >= checkpoint_every_ns_) {
     last_checkpoint_ns_ = t;
     out_.checkpoint_due();
   }
 }
 
 void FilterStage::Update(const PoseSample& p, TimeNs t) {
-  const UpdateResult r = cal_->AddPose(t, p.xytheta, p.covariance, cfg_.filter.gate_nis);
+  const UpdateResult r = cal_->AddPose(t, p.xytheta, p.covariance, opt_.filter.gate_nis);
   if (r.gated) {
     counters_.poses_gated.fetch_add(1);
-    if (++consecutive_gated_ >= cfg_.filter.divergence_gated) Recover(p, t);
+    if (++consecutive_gated_ >= opt_.filter.divergence_gated) Recover(p, t);
   } else if (r.ok) {
     consecutive_gated_ = 0;
     counters_.updates.fetch_add(1);
@@ -247,7 +265,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t) {
   consecutive_gated_ = 0;
   counters_.filter_resets.fetch_add(1);
   spdlog::warn("filter diverged ({} poses in a row failed the innovation gate): restarted from {}",
-               cfg_.filter.divergence_gated, how);
+               opt_.filter.divergence_gated, how);
 }
 
 // ---- outputs ----------------------------------------------------------------------------
@@ -256,7 +274,7 @@ int FilterStage::ParamsStatus(bool converged) const {
   const ModelCheckVerdict verdict = check_->Verdict();
   const bool nis_far_off = verdict.window >= kDivergedMinWindow &&
                            verdict.nis_mean > kDivergedNisRatio * verdict.nis_expected;
-  if (consecutive_gated_ > 0 && consecutive_gated_ < cfg_.filter.divergence_gated) {
+  if (consecutive_gated_ > 0 && consecutive_gated_ < opt_.filter.divergence_gated) {
     return kincal::params_t::STATUS_CONVERGING;
   }
   if (nis_far_off || consecutive_gated_ > 0) return kincal::params_t::STATUS_DIVERGED;
@@ -279,7 +297,7 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
                     static_cast<int8_t>(ParamsStatus(converged)), PipelineNsToUtime(t), &m);
   out_.params(m.utime, m);
   estimate_.model = m.model;
-  estimate_.effects = cfg_.robot.effects;
+  estimate_.effects = opt_.effects;
   estimate_.filter = m.estimator;
   estimate_.utime = m.utime;
   estimate_.update_count = m.update_count;
@@ -300,7 +318,7 @@ void FilterStage::PublishModelCheck(TimeNs t) {
 void FilterStage::Finish() {
   if (!cal_ || !cal_->initialized()) return;
   PublishParams(time_base_.last_pose_ns(), true);
-  if (!cfg_.checkpoint.path.empty()) out_.checkpoint_due();
+  if (!opt_.checkpoint_path.empty()) out_.checkpoint_due();
 }
 
 }  // namespace kincal::daemon

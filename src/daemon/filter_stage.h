@@ -39,8 +39,21 @@ struct FilterPrior {
   StateMat covariance;
 };
 // The configured guess, with robot.guess_sigma_fraction of each value (or of the
-// parameter's default sigma, whichever is larger) as its sigma.
-FilterPrior ConfiguredPrior(const System& sys, const DaemonConfig& c);
+// parameter's default sigma, whichever is larger) as its sigma. `file` names the config in
+// errors.
+FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const std::string& file);
+
+// What the filter stage is configured with (from the config's filter, robot, checkpoint
+// sections and the health rate).
+struct FilterStageOptions {
+  FilterOptions filter;
+  std::vector<std::string> effects;  // declared (for the estimate and checkpoints)
+  double model_check_every_s = 1.0;  // a model_check_t this often (the health rate)
+  std::string checkpoint_path;       // empty: no checkpoints
+  double checkpoint_every_s = 10.0;
+  bool IsValid(std::string* error) const;
+};
+FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c);
 // Replaces the prior's parameters that a checkpoint has (matched by name; the others keep
 // the configured prior). Returns how many matched.
 int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior);
@@ -57,7 +70,7 @@ class FilterStage {
  public:
   // `next_control` pops the next queued control (false when none is waiting); the stage
   // drains it itself, because a clock jump must take exactly the controls queued behind it.
-  FilterStage(const System& sys, const DaemonConfig& c, FilterPrior prior,
+  FilterStage(const System& sys, FilterStageOptions options, FilterPrior prior,
               std::function<bool(ControlSample*)> next_control, FilterOutputs outputs,
               CounterSet* counters);
   ~FilterStage();
@@ -90,7 +103,7 @@ class FilterStage {
   int ParamsStatus(bool converged) const;
 
   const System& sys_;
-  const DaemonConfig& cfg_;
+  const FilterStageOptions opt_;
   FilterPrior prior_;
   Eigen::VectorXd prior_sigma_;  // of the configured or resumed prior (convergence test)
   OnlineCalibratorOptions calibrator_options_;

@@ -23,8 +23,9 @@ vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Ve
 
 }  // namespace
 
-PoseStage::PoseStage(const DaemonConfig& c, const VisionSetup& v)
-    : cfg_(c), vis_(v), tracker_(v.camera, v.layout, c.detector) {}
+PoseStage::PoseStage(const PoseOptions& pose, const vision::DetectorOptions& detector,
+                     const VisionSetup& v)
+    : opt_(pose), vis_(v), tracker_(v.camera, v.layout, detector) {}
 
 bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
   *p = PoseSample{};
@@ -59,7 +60,7 @@ bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
     // current pose and solve once more.
     if (p->valid) {
       vision::CorrectPerspectiveBias(vis_.camera,
-                                     CameraPoseOf(vis_.floor, p->xytheta, cfg_.target.height_m),
+                                     CameraPoseOf(vis_.floor, p->xytheta, vis_.target_height_m),
                                      vis_.layout, &markers);
       Solve(markers, p);
     }
@@ -82,20 +83,20 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
   const std::span<const Eigen::Vector2d> n(norm_.data(), static_cast<size_t>(nm));
   Eigen::Vector3d init = last_pose_;
   vision::Pose3 pose3;
-  if (!have_last_ || cfg_.pose.method == PoseMethod::kLowe) {
+  if (!have_last_ || opt_.method == PoseMethod::kLowe) {
     if (!vision::PlanarInitialPose(o, n, &pose3)) return;
     init = FloorPoseOf(vis_.floor, pose3);
   }
-  if (cfg_.pose.method == PoseMethod::kGroundPlane) {
-    const auto r = vision::GroundPlanePose(vis_.floor, cfg_.target.height_m, o, n, init,
-                                           vis_.camera.fx, cfg_.pose.sigma_px);
-    if (!r.ok || !(r.rms_px <= cfg_.pose.max_rms_px) || !r.xytheta.allFinite()) return;
+  if (opt_.method == PoseMethod::kGroundPlane) {
+    const auto r = vision::GroundPlanePose(vis_.floor, vis_.target_height_m, o, n, init,
+                                           vis_.camera.fx, opt_.sigma_px);
+    if (!r.ok || !(r.rms_px <= opt_.max_rms_px) || !r.xytheta.allFinite()) return;
     p->xytheta = r.xytheta;
     p->covariance = r.covariance;
     p->rms_px = r.rms_px;
   } else {
-    const auto r = vision::LowePose(o, n, pose3, vis_.camera.fx, cfg_.pose.sigma_px);
-    if (!r.ok || !(r.rms_px <= cfg_.pose.max_rms_px)) return;
+    const auto r = vision::LowePose(o, n, pose3, vis_.camera.fx, opt_.sigma_px);
+    if (!r.ok || !(r.rms_px <= opt_.max_rms_px)) return;
     p->xytheta = FloorPoseOf(vis_.floor, r.pose);
     // (x, y) are linear in the translation D; theta moves with the floor-z component of
     // the rotation increment.

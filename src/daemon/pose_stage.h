@@ -18,7 +18,7 @@ namespace kincal::daemon {
 
 class PoseStage {
  public:
-  PoseStage(const DaemonConfig& c, const VisionSetup& v);
+  PoseStage(const PoseOptions& pose, const vision::DetectorOptions& detector, const VisionSetup& v);
   // Fills *out (times and sequence from the frame). Returns false with *error set when the
   // frame cannot be decoded or has the wrong size; a frame without the target gives a
   // pose with valid = false and returns true.
@@ -28,7 +28,7 @@ class PoseStage {
  private:
   void Solve(const std::vector<vision::Marker>& markers, PoseSample* p);
 
-  const DaemonConfig& cfg_;
+  const PoseOptions opt_;
   const VisionSetup& vis_;
   vision::MarkerTracker tracker_;
   cv::Mat grey_;

@@ -18,27 +18,23 @@ namespace {
 
 class ReplaySource final : public FrameSource {
  public:
-  ReplaySource(const DaemonConfig& c, ControlIntake controls)
-      : cfg_(c), intake_(std::move(controls)) {
+  ReplaySource(const ReplayOptions& replay, const LcmOptions& lcm, ControlIntake controls)
+      : opt_(replay), lcm_(lcm), intake_(std::move(controls)) {
     struct stat st {};
-    if (::stat(c.replay.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-      throw std::runtime_error(c.replay.path + ": cannot open log for replay (no such file)");
+    if (::stat(opt_.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+      throw std::runtime_error(opt_.path + ": cannot open log for replay (no such file)");
     }
-    try {
-      log_.emplace(c.replay.path);
-    } catch (const std::runtime_error& e) {
-      throw std::runtime_error(e.what());
-    }
+    log_.emplace(opt_.path);  // throws std::runtime_error naming the file
   }
   ~ReplaySource() override { ReportDamage(); }
-  std::string name() const override { return "replay(" + cfg_.replay.path + ")"; }
+  std::string name() const override { return "replay(" + opt_.path + ")"; }
   Status Start() override {
     start_mono_ = MonotonicNs();
     return {};
   }
   void Stop() override { stopped_ = true; }
   SourceCapabilities capabilities() const override {
-    return {.lossless = cfg_.replay.speed <= 0,
+    return {.lossless = opt_.speed <= 0,
             .carries_controls = true,
             .controls_end_with_frames = true,
             .can_reopen = false};
@@ -52,7 +48,7 @@ class ReplaySource final : public FrameSource {
         ReportDamage();
         // End of the log: again, shifted later by its span plus one nominal frame period,
         // so that time keeps increasing.
-        if (++loop_ >= cfg_.replay.loops || last_utime_ == INT64_MIN) return SourceStatus::kEnd;
+        if (++loop_ >= opt_.loops || last_utime_ == INT64_MIN) return SourceStatus::kEnd;
         offset_ += last_utime_ - first_utime_ + 33'333;
         log_->Rewind();
         continue;
@@ -61,13 +57,13 @@ class ReplaySource final : public FrameSource {
       ++events_;
       if (first_utime_ == INT64_MIN) first_utime_ = ev->timestamp;
       if (loop_ == 0) last_utime_ = std::max(last_utime_, ev->timestamp);
-      if (cfg_.replay.speed > 0) Pace(ev->timestamp + offset_);
+      if (opt_.speed > 0) Pace(ev->timestamp + offset_);
       const std::string_view channel(ev->channel);
-      if (channel == cfg_.lcm.controls_channel) {
+      if (channel == lcm_.controls_channel) {
         intake_(ev->data.data(), ev->data.size(), ev->timestamp + offset_);
         continue;
       }
-      if (channel != cfg_.lcm.frame_channel) {
+      if (channel != lcm_.frame_channel) {
         ++skipped_;
         continue;
       }
@@ -75,7 +71,7 @@ class ReplaySource final : public FrameSource {
       if (!PlausibleFrame(ev->data.data(), ev->data.size(), &why) ||
           msg_.decode(ev->data.data(), 0, static_cast<int>(ev->data.size())) < 0 ||
           msg_.size != static_cast<int32_t>(msg_.data.size())) {
-        *error = cfg_.replay.path + ": event " + std::to_string(ev->eventnum) + " on " +
+        *error = opt_.path + ": event " + std::to_string(ev->eventnum) + " on " +
                  std::string(channel) + ": not a kincal.frame_t";
         ++bad_frames_;
         continue;  // reported through the frame error count, replay goes on
@@ -115,14 +111,15 @@ class ReplaySource final : public FrameSource {
 
   void Pace(int64_t utime) {
     const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(utime - first_utime_) *
-                                                         1000.0 / cfg_.replay.speed);
+                                                         1000.0 / opt_.speed);
     while (!stopped_ && MonotonicNs() < due) {
       std::this_thread::sleep_for(
           std::chrono::nanoseconds(std::min<TimeNs>(due - MonotonicNs(), 50'000'000)));
     }
   }
 
-  const DaemonConfig& cfg_;
+  const ReplayOptions opt_;
+  const LcmOptions lcm_;
   ControlIntake intake_;
   std::optional<LcmLogReader> log_;
   LcmLogEvent ev_;
@@ -138,8 +135,9 @@ class ReplaySource final : public FrameSource {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> MakeReplaySource(const DaemonConfig& c, ControlIntake controls) {
-  return std::make_unique<ReplaySource>(c, std::move(controls));
+std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
+                                              ControlIntake controls) {
+  return std::make_unique<ReplaySource>(replay, lcm, std::move(controls));
 }
 
 }  // namespace kincal::daemon

@@ -17,7 +17,7 @@ namespace {
 
 class SimSource final : public FrameSource {
  public:
-  SimSource(const DaemonConfig& c, const VisionSetup& v, ControlIntake controls,
+  SimSource(const SimSourceOptions& c, const VisionSetup& v, ControlIntake controls,
             NetworkPublish publish)
       : cfg_(c),
         vis_(v),
@@ -27,10 +27,10 @@ class SimSource final : public FrameSource {
         publish_(std::move(publish)),
         rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
         fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
-    if (sc_.model != c.robot.model) {
+    if (sc_.model != c.robot_model) {
       throw std::runtime_error(c.sim.scenario + ": scenario model '" + sc_.model +
-                               "' differs from robot.model '" + c.robot.model + "' in " +
-                               (c.file.empty() ? "the config" : c.file));
+                               "' differs from robot.model '" + c.robot_model + "' in " +
+                               (c.config_file.empty() ? "the config" : c.config_file));
     }
     const int nc = truth_.num_controls();
     if (static_cast<int>(sc_.control_low.size()) != nc ||
@@ -107,7 +107,7 @@ class SimSource final : public FrameSource {
       const Eigen::Matrix3d Rz =
           Eigen::AngleAxisd(target.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
       pose.R = vis_.floor.R_cf * Rz;
-      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), cfg_.target.height_m) +
+      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), vis_.target_height_m) +
                vis_.floor.t_cf;
       in_view = InView(pose);
       if (!in_view) {
@@ -185,11 +185,11 @@ class SimSource final : public FrameSource {
     const int n = msg_.getEncodedSize();
     buf_.resize(static_cast<size_t>(n));
     msg_.encode(buf_.data(), 0, n);
-    publish_(cfg_.lcm.controls_channel, buf_.data(), buf_.size());
+    publish_(cfg_.controls_channel, buf_.data(), buf_.size());
     if (!cfg_.sim.controls_via_lcm) intake_(buf_.data(), buf_.size(), msg_.utime);
   }
 
-  const DaemonConfig& cfg_;
+  const SimSourceOptions cfg_;
   const VisionSetup& vis_;
   Scenario sc_;
   System truth_;
@@ -215,7 +215,7 @@ class SimSource final : public FrameSource {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v,
+std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& c, const VisionSetup& v,
                                            ControlIntake controls, NetworkPublish publish) {
   return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish));
 }

@@ -47,9 +47,10 @@ std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup
                                         ControlIntake controls, NetworkPublish publish) {
   switch (c.source) {
     case SourceKind::kSim:
-      return MakeSimSource(c, v, std::move(controls), std::move(publish));
+      return MakeSimSource({c.sim, c.robot.model, c.lcm.controls_channel, c.file}, v,
+                           std::move(controls), std::move(publish));
     case SourceKind::kReplay:
-      return MakeReplaySource(c, std::move(controls));
+      return MakeReplaySource(c.replay, c.lcm, std::move(controls));
     case SourceKind::kV4l2:
       return MakeV4l2Source(c.v4l2);
     case SourceKind::kLibcamera:
@@ -72,6 +73,7 @@ VisionSetup LoadVisionSetup(const DaemonConfig& c) {
   v.floor = c.camera.floor.empty() ? vision::NadirFloor(c.camera.nadir_height_m)
                                    : vision::ReadFloorYaml(c.camera.floor);
   v.layout = vision::ReadTargetLayoutYaml(c.target.layout);
+  v.target_height_m = c.target.height_m;
   if (static_cast<int>(v.layout.markers.size()) > kMaxMarkers) {
     throw std::runtime_error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) +
                              " markers per target");

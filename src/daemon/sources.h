@@ -18,6 +18,7 @@ struct VisionSetup {
   vision::CameraModel camera;
   vision::FloorExtrinsics floor;
   vision::TargetLayout layout;
+  double target_height_m = 0.0;  // the target plane above the floor
 };
 VisionSetup LoadVisionSetup(const DaemonConfig& c);
 
@@ -31,11 +32,18 @@ using NetworkPublish = std::function<void(const std::string& channel, const void
 // carrying the target, and publishes the robot's commands like a robot would. A run
 // ends when the target nears the image edge; the robot is then carried back to the
 // centre (no target in view for sim.carry_s) and starts a new run.
-std::unique_ptr<FrameSource> MakeSimSource(const DaemonConfig& c, const VisionSetup& v,
+struct SimSourceOptions {
+  SimOptions sim;
+  std::string robot_model;       // the config's robot.model: must be the scenario's
+  std::string controls_channel;  // where the simulated robot publishes its commands
+  std::string config_file;       // named in errors
+};
+std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& o, const VisionSetup& v,
                                            ControlIntake controls, NetworkPublish publish);
 // An LCM log written by `kincald --record`: frames on lcm.frame_channel, controls on
 // lcm.controls_channel (other channels are skipped and counted).
-std::unique_ptr<FrameSource> MakeReplaySource(const DaemonConfig& c, ControlIntake controls);
+std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
+                                              ControlIntake controls);
 // Video4Linux2 capture device, mmap streaming.
 std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o);
 // libcamera camera.
