@@ -14,6 +14,8 @@
 namespace kincal {
 
 // Augmented state: pose (3) + model parameters + effect parameters + effect states.
+// A planar pose (x, y, theta): the reference pose in every state, and every measurement.
+inline constexpr int kPoseDim = 3;
 inline constexpr int kMaxState = 24;
 // Control channels of any model.
 inline constexpr int kMaxControls = 4;
@@ -21,7 +23,7 @@ inline constexpr int kMaxControls = 4;
 inline constexpr int kMaxEffectStates = 6;
 // Process-noise inputs: one per control channel, 3 additive pose terms, one per effect
 // state.
-inline constexpr int kMaxNoise = kMaxControls + 3 + kMaxEffectStates;
+inline constexpr int kMaxNoise = kMaxControls + kPoseDim + kMaxEffectStates;
 // Measurement dimension (a planar pose is 3).
 inline constexpr int kMaxMeas = 6;
 // Derivative slots of the autodiff scalar: enough for state + noise, or for one batch

@@ -49,7 +49,7 @@ ModelCheck::ModelCheck(const System& sys, ModelCheckOptions options)
 
 void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& state,
                      const ControlSignal& u) {
-  if (!update.ok || update.innovation.size() < 3) return;
+  if (!update.ok || update.innovation.size() < kPoseDim) return;
   const double th = state[2];
   const double c = std::cos(th), s = std::sin(th);
   const double ix = update.innovation[0], iy = update.innovation[1];

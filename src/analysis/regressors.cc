@@ -6,6 +6,26 @@
 #include "kincal/angles.h"
 
 namespace kincal::analysis {
+namespace {
+
+// The commanded twist is sampled at this many points across a window.
+constexpr int kTwistSamples = 8;
+// "Moving": a command above this fraction of the recording's largest; "small": below this
+// fraction (where dead bands act).
+constexpr double kMovingFraction = 1e-3;
+constexpr double kSmallFraction = 0.25;
+// A steering reversal compares the steering command with its value this long before.
+constexpr double kSteerLookbackS = 0.5;
+// The command lag: measured speed and turn rate from pose differences over 2 kLagHalfS,
+// every kLagStepS; lags searched over +-kMaxLagS in steps of kLagSearchStepS; at least
+// kMinLagSamples samples.
+constexpr double kLagStepS = 0.05;
+constexpr double kLagHalfS = 0.1;
+constexpr double kMaxLagS = 5.0;
+constexpr double kLagSearchStepS = 0.02;
+constexpr size_t kMinLagSamples = 50;
+
+}  // namespace
 
 // Regressors per evaluation window, from the commanded body twist of the bare model.
 void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
@@ -27,7 +47,7 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
     const double ta = d->t[static_cast<size_t>(w.start)], tb = d->t[static_cast<size_t>(w.end)];
     RegressorValues f;
     double sv = 0, sw = 0, sav = 0, saw = 0, sww = 0, svw = 0, mov = 0, smv = 0, smw = 0;
-    const int K = 8;
+    const int K = kTwistSamples;
     for (int k = 0; k < K; ++k) {
       const auto tw = twist(ta + (k + 0.5) * (tb - ta) / K);
       sv += tw.vx;
@@ -36,10 +56,14 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
       saw += std::abs(tw.omega);
       sww += tw.omega * std::abs(tw.omega);
       svw += tw.vx * tw.omega;
-      mov += (std::abs(tw.vx) > 1e-3 * vmax || std::abs(tw.omega) > 1e-3 * wmax) ? 1.0 : 0.0;
-      smv +=
-          (std::abs(tw.vx) > 0 && std::abs(tw.vx) < 0.25 * vmax) ? (tw.vx > 0 ? 1.0 : -1.0) : 0.0;
-      smw += (std::abs(tw.omega) > 0 && std::abs(tw.omega) < 0.25 * wmax)
+      mov +=
+          (std::abs(tw.vx) > kMovingFraction * vmax || std::abs(tw.omega) > kMovingFraction * wmax)
+              ? 1.0
+              : 0.0;
+      smv += (std::abs(tw.vx) > 0 && std::abs(tw.vx) < kSmallFraction * vmax)
+                 ? (tw.vx > 0 ? 1.0 : -1.0)
+                 : 0.0;
+      smw += (std::abs(tw.omega) > 0 && std::abs(tw.omega) < kSmallFraction * wmax)
                  ? (tw.omega > 0 ? 1.0 : -1.0)
                  : 0.0;
     }
@@ -62,7 +86,7 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
     f.Set(Regressor::kTime, ta);
     if (sc >= 0) {
       const double s_now = u.At(ta)[static_cast<size_t>(sc)];
-      const double s_before = u.At(ta - 0.5)[static_cast<size_t>(sc)];
+      const double s_before = u.At(ta - kSteerLookbackS)[static_cast<size_t>(sc)];
       f.Set(Regressor::kSteerReversal, s_now > s_before ? 1.0 : (s_now < s_before ? -1.0 : 0.0));
     }
     d->features.push_back(std::move(f));
@@ -76,7 +100,7 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
 double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::VectorXd& p) {
   const auto& P = d.rec->poses;
   const auto& u = d.rec->controls;
-  const double dt = 0.05, half = 0.1;
+  const double dt = kLagStepS, half = kLagHalfS;
   std::vector<double> vm, wm, tgrid;
   for (double t = std::max(d.t.front(), d.t_ctrl0) + half; t < d.t_split - half; t += dt) {
     const auto a = std::lower_bound(d.t.begin(), d.t.end(), t - half);
@@ -91,7 +115,7 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
     wm.push_back(WrapAngle(P[j].z.z() - P[i].z.z()) / span);
     tgrid.push_back(t);
   }
-  if (vm.size() < 50) return 0.0;
+  if (vm.size() < kMinLagSamples) return 0.0;
   auto corr = [](const std::vector<double>& a, const std::vector<double>& b) {
     const double n = static_cast<double>(a.size());
     const double ma = std::accumulate(a.begin(), a.end(), 0.0) / n;
@@ -106,7 +130,7 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
   };
   double best = -1e300, best_lag = 0.0;
   std::vector<double> vc(vm.size()), wc(vm.size());
-  for (double lag = -5.0; lag <= 5.0 + 1e-9; lag += 0.02) {
+  for (double lag = -kMaxLagS; lag <= kMaxLagS + 1e-9; lag += kLagSearchStepS) {
     for (size_t k = 0; k < tgrid.size(); ++k) {
       const auto tw = bare.model().BodyTwist(p.data(), u.At(tgrid[k] - lag).data());
       vc[k] = tw.vx;

@@ -7,6 +7,13 @@
 namespace kincal::analysis {
 namespace {
 
+// A time-varying effect (a lag) also starts at the command lag when that lag exceeds this.
+constexpr double kMinLagForStartS = 0.05;
+// Extra starts for a single new parameter: its default +- this many default sigmas.
+constexpr double kStartSpreadSigmas = 2.0;
+// The best start is refined with the covariance, for at most this many iterations.
+constexpr int kRefineIterations = 20;
+
 // Starting points for one candidate's fit.
 std::vector<Eigen::VectorXd> Starts(const System& sys, const Effect& eff, const Eigen::VectorXd& p,
                                     double command_lag) {
@@ -17,14 +24,15 @@ std::vector<Eigen::VectorXd> Starts(const System& sys, const Effect& eff, const 
   for (int i = old_np; i < np; ++i) s0[i] = sys.params()[static_cast<size_t>(i)].default_value;
   std::vector<Eigen::VectorXd> starts = {s0};
   const bool timing = eff.stage() == EffectStage::kControlTiming;
-  if (np - old_np == 1 && (timing || (eff.time_varying() && std::abs(command_lag) > 0.05))) {
+  if (np - old_np == 1 &&
+      (timing || (eff.time_varying() && std::abs(command_lag) > kMinLagForStartS))) {
     // Timing: start at the lag the cross-correlation found (a delay or a lag's tau).
     Eigen::VectorXd s = s0;
     s[np - 1] = timing ? command_lag : std::abs(command_lag);
     starts.push_back(s);
   }
   if (np - old_np == 1) {
-    for (double k : {-2.0, 2.0}) {
+    for (double k : {-kStartSpreadSigmas, kStartSpreadSigmas}) {
       Eigen::VectorXd s = s0;
       s[np - 1] += k * sys.params()[static_cast<size_t>(np - 1)].default_sigma;
       starts.push_back(s);
@@ -98,7 +106,7 @@ bool TryEffect(const std::string& spec, int round, const SelectionState& current
     if (f.ok && (!best.ok || f.cost < best.cost)) best = std::move(f);
   }
   if (!best.ok) return false;
-  best = RunFit(*sys, controls, d.fit_meas, best.p, true, o.num_threads, 20);
+  best = RunFit(*sys, controls, d.fit_meas, best.p, true, o.num_threads, kRefineIterations);
   if (!best.ok) return false;
   t.fit = best;
   t.eval = Evaluate(*sys, best.p, d);

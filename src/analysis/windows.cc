@@ -9,12 +9,22 @@
 namespace kincal::analysis {
 namespace {
 
+// A window whose horizon end lands more than this fraction of the horizon (plus 1 ms)
+// past the nearest pose spans a gap and is not used.
+constexpr double kMaxEndOvershoot = 0.1;
+// The multi-start stage's short windows: a quarter horizon, at least 0.2 s, at most 150.
+constexpr double kShortWindowFraction = 0.25;
+constexpr double kMinShortWindowS = 0.2;
+constexpr int kMaxShortWindows = 150;
+// The fewest poses a recording must have.
+constexpr size_t kMinPoses = 20;
+
 int FindEnd(const std::vector<double>& t, int i, double h) {
   const double target = t[static_cast<size_t>(i)] + h;
   const auto it = std::lower_bound(t.begin() + i, t.end(), target - 1e-9);
   if (it == t.end()) return -1;
   const int j = static_cast<int>(it - t.begin());
-  if (t[static_cast<size_t>(j)] - target > 0.1 * h + 1e-3) return -1;  // a gap
+  if (t[static_cast<size_t>(j)] - target > kMaxEndOvershoot * h + 1e-3) return -1;  // a gap
   return j;
 }
 
@@ -90,9 +100,9 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   Dataset d;
   d.rec = &rec;
   d.horizon = o.horizon_s;
-  if (rec.poses.size() < 20)
+  if (rec.poses.size() < kMinPoses)
     throw AnalysisError(rec.source + ": only " + std::to_string(rec.poses.size()) +
-                        " poses; at least 20 are needed");
+                        " poses; at least " + std::to_string(kMinPoses) + " are needed");
   if (rec.controls.size() < 2) throw AnalysisError(rec.source + ": fewer than 2 control samples");
   for (const auto& p : rec.poses) d.t.push_back(rec.controls.ToSeconds(p.t_ns));
   d.t_ctrl0 = rec.controls.TimeAt(0);
@@ -127,8 +137,9 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     if (fit || held) d.eval.push_back({i, j});
   }
   d.fit_windows = NonOverlapping(d, o.horizon_s, t0, d.t_split, o.max_fit_windows);
-  const double hs = std::max(0.2, 0.25 * o.horizon_s);
-  d.short_windows = NonOverlapping(d, hs, t0, d.t_split, std::min(150, o.max_fit_windows));
+  const double hs = std::max(kMinShortWindowS, kShortWindowFraction * o.horizon_s);
+  d.short_windows =
+      NonOverlapping(d, hs, t0, d.t_split, std::min(kMaxShortWindows, o.max_fit_windows));
   if (d.fit_windows.size() < 5)
     throw AnalysisError(rec.source +
                         ": fewer than 5 prediction windows in the fit part (gaps, or a recording "

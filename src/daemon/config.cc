@@ -241,7 +241,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     std::vector<double> psd;
     s.Get("pose_psd", &psd);
     if (!psd.empty()) {
-      if (psd.size() != 3)
+      if (psd.size() != kPoseDim)
         throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
       c.filter.pose_psd = {psd[0], psd[1], psd[2]};
     }

@@ -38,7 +38,9 @@ void FillPoseMessage(const PoseSample& p, kincal::pose_t* m) {
   m->x = p.xytheta.x();
   m->y = p.xytheta.y();
   m->theta = p.xytheta.z();
-  for (int i = 0; i < 9; ++i) m->covariance[i] = p.covariance(i / 3, i % 3);
+  for (int i = 0; i < kPoseDim * kPoseDim; ++i) {
+    m->covariance[i] = p.covariance(i / kPoseDim, i % kPoseDim);
+  }
   m->reprojection_rms_px = p.rms_px;
   m->valid = p.valid ? 1 : 0;
 }

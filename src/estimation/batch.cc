@@ -21,7 +21,7 @@ class SegmentCost final : public ceres::CostFunction {
               std::vector<const PoseMeasurement*> meas)
       : sys_(sys), u_(u), t0_(t0_s), warmup_(warmup_s), meas_(std::move(meas)) {
     set_num_residuals(3 * static_cast<int>(meas_.size()));
-    mutable_parameter_block_sizes()->push_back(3);
+    mutable_parameter_block_sizes()->push_back(kPoseDim);
     mutable_parameter_block_sizes()->push_back(sys_.num_params());
     for (const auto* m : meas_) {
       Eigen::LLT<Eigen::Matrix3d> llt(m->R);  // positive definite: CheckMeasurements
@@ -45,7 +45,7 @@ class SegmentCost final : public ceres::CostFunction {
   bool Run(double const* const* parameters, double* residuals, double** jacobians) const {
     const int np = sys_.num_params();
     T x[kMaxState];
-    for (int i = 0; i < 3; ++i) x[i] = Seed<T>(parameters[0][i], i);
+    for (int i = 0; i < kPoseDim; ++i) x[i] = Seed<T>(parameters[0][i], i);
     for (int i = 0; i < np; ++i) x[3 + i] = Seed<T>(parameters[1][i], 3 + i);
     for (int i = sys_.state_offset(); i < sys_.state_dim(); ++i) x[i] = T(0.0);
     if (sys_.num_states() > 0 && warmup_ > 0.0) {
@@ -54,7 +54,7 @@ class SegmentCost final : public ceres::CostFunction {
       const T pose[3] = {x[0], x[1], x[2]};
       sys_.InitEffectStates(x, u_, t0_ - warmup_);
       sys_.Propagate(x, x, t0_ - warmup_, t0_, u_, static_cast<const T*>(nullptr));
-      for (int i = 0; i < 3; ++i) x[i] = pose[i];
+      for (int i = 0; i < kPoseDim; ++i) x[i] = pose[i];
     } else {
       sys_.InitEffectStates(x, u_, t0_);
     }
@@ -67,13 +67,13 @@ class SegmentCost final : public ceres::CostFunction {
       const Eigen::Vector3d& zm = meas_[k]->z;
       T e[3] = {T(zm.x()) - z[0], T(zm.y()) - z[1], T(zm.z()) - z[2]};
       e[2] = WrapT(e[2]);
-      for (int r = 0; r < 3; ++r) {
+      for (int r = 0; r < kPoseDim; ++r) {
         const T res = whiten_[k](r, 0) * e[0] + whiten_[k](r, 1) * e[1] + whiten_[k](r, 2) * e[2];
         const int row = 3 * static_cast<int>(k) + r;
         residuals[row] = ScalarOf(res);
         if constexpr (!std::is_same_v<T, double>) {
           if (jacobians[0] != nullptr) {
-            for (int j = 0; j < 3; ++j) jacobians[0][row * 3 + j] = res.v[j];
+            for (int j = 0; j < kPoseDim; ++j) jacobians[0][row * kPoseDim + j] = res.v[j];
           }
           if (jacobians[1] != nullptr) {
             for (int j = 0; j < np; ++j) jacobians[1][row * np + j] = res.v[3 + j];
@@ -136,7 +136,7 @@ class PriorCost final : public ceres::CostFunction {
 struct Problem {
   ceres::Problem problem;
   std::vector<SegmentCost*> costs;
-  std::vector<std::array<double, 3>> starts;
+  std::vector<std::array<double, kPoseDim>> starts;
   std::vector<TimeNs> start_ns;
   Eigen::VectorXd params;
 };

@@ -63,7 +63,7 @@ void SystemPoseMeasurement::Jacobian(const StateVec& x, MeasStateMat* H) const {
   for (int i = 0; i < n; ++i) xj[i] = Jet(x[i], i);
   sys_.Measure(xj, z);
   H->resize(3, n);
-  for (int i = 0; i < 3; ++i) {
+  for (int i = 0; i < kPoseDim; ++i) {
     for (int j = 0; j < n; ++j) (*H)(i, j) = z[i].v[j];
   }
 }
@@ -76,7 +76,7 @@ NoiseMat ProcessNoiseSqrt(const System& sys, const ProcessNoiseOptions& noise, d
     // A white noise of PSD q averaged over dt has variance q / dt.
     Sv(c, c) = std::sqrt(noise.control_psd[static_cast<size_t>(c)] / dt_s);
   }
-  for (int i = 0; i < 3; ++i) Sv(nc + i, nc + i) = std::sqrt(noise.pose_psd[i] * dt_s);
+  for (int i = 0; i < kPoseDim; ++i) Sv(nc + i, nc + i) = std::sqrt(noise.pose_psd[i] * dt_s);
   for (int i = nc + 3; i < sys.noise_dim(); ++i)
     Sv(i, i) = std::sqrt(noise.effect_state_psd * dt_s);
   return Sv;
@@ -137,7 +137,7 @@ UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
   PredictTo(t_ns);
   if (gate_nis > 0.0) {
     const StateVec& x = filter_->mean();
-    MeasVec zp(3);
+    MeasVec zp(kPoseDim);
     meas_.Eval(x.data(), zp.data());
     MeasVec nu = z - zp;
     nu[2] = WrapAngle(nu[2]);
@@ -174,7 +174,7 @@ void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z, const Ei
   auto g = [&](const StateVec& xs, const Eigen::Vector3d& zs) {
     StateVec out = xs;
     sys_.SetPoseFromMeasurement(zs.data(), out.data());
-    return Eigen::Vector3d(out.head(3));
+    return Eigen::Vector3d(out.head(kPoseDim));
   };
   const Eigen::Vector3d pose = g(x, z);
   // J = d(new state)/d(old state): identity except the pose rows; Gz = d pose / d z.
@@ -190,7 +190,7 @@ void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z, const Ei
     d.z() = WrapAngle(d.z());
     J.block(0, j, 3, 1) = d / (2.0 * h);
   }
-  for (int j = 0; j < 3; ++j) {
+  for (int j = 0; j < kPoseDim; ++j) {
     Eigen::Vector3d zp = z, zm = z;
     zp[j] += 1e-6;
     zm[j] -= 1e-6;
@@ -200,7 +200,7 @@ void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z, const Ei
   }
   StateMat P = J * filter_->covariance() * J.transpose();
   P.topLeftCorner(3, 3) += Gz * R * Gz.transpose();
-  x.head(3) = pose;
+  x.head(kPoseDim) = pose;
   x[2] = WrapAngle(x[2]);
   filter_->Initialize(x, P, 1u << 2);
   t_ns_ = t_ns;

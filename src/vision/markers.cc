@@ -27,6 +27,23 @@ bool DetectorOptions::IsValid(std::string* error) const {
 
 namespace {
 
+// The Otsu histogram samples every kOtsuStride-th pixel of every kOtsuStride-th row.
+constexpr int kOtsuStride = 2;
+// Blobs smaller than this are noise, dropped without a rejection note.
+constexpr int64_t kMinReportedArea = 4;
+// The centroid window: the blob's box grown by this many pixels, which holds the edge
+// blur; the background is the median of its border.
+constexpr int kCentroidMarginPx = 2;
+// The marker level: this quantile of the foreground pixels (the darkest quarter's edge).
+constexpr size_t kForegroundQuantileDivisor = 4;
+// Moment floors, and the variance a pixel adds to a pixelated disk's moments (1/12 per
+// axis).
+constexpr double kMomentFloor = 1e-12;
+constexpr double kPixelVariance = 1.0 / 12.0;
+// A target seen more obliquely than about 78 deg (singular value ratio below this) is not
+// identified.
+constexpr double kMinAffineSingularRatio = 0.2;
+
 // One connected component, accumulated from its horizontal runs.
 struct Blob {
   int parent;
@@ -54,9 +71,9 @@ struct Run {
 int OtsuThreshold(const cv::Mat& view, int min_contrast) {
   std::array<int64_t, 256> hist{};
   int64_t n = 0;
-  for (int y = 0; y < view.rows; y += 2) {
+  for (int y = 0; y < view.rows; y += kOtsuStride) {
     const uint8_t* row = view.ptr<uint8_t>(y);
-    for (int x = 0; x < view.cols; x += 2) {
+    for (int x = 0; x < view.cols; x += kOtsuStride) {
       ++hist[row[x]];
       ++n;
     }
@@ -205,7 +222,7 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       if (rejected != nullptr) rejected->push_back({c0, why});
     };
     if (b.area < opt.min_area_px) {
-      if (b.area >= 4)
+      if (b.area >= kMinReportedArea)
         reject("area " + std::to_string(b.area) + " < " + std::to_string(opt.min_area_px));
       continue;
     }
@@ -223,11 +240,13 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
                  sxy = b.sxy / area - mx * my;
     const double tr = sxx + syy, det = sxx * syy - sxy * sxy;
     const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
-    const double l1 = std::max(0.5 * tr + disc, 1e-12), l2 = std::max(0.5 * tr - disc, 1e-12);
+    const double l1 = std::max(0.5 * tr + disc, kMomentFloor);
+    const double l2 = std::max(0.5 * tr - disc, kMomentFloor);
     const double circ = std::sqrt(l2 / l1);
     // A pixelated disk's moments include each pixel's own spread (1/12 per axis).
-    const double ellipse_area =
-        4.0 * M_PI * std::sqrt(std::max(l1 - 1.0 / 12.0, 1e-12) * std::max(l2 - 1.0 / 12.0, 1e-12));
+    const double ellipse_area = 4.0 * M_PI *
+                                std::sqrt(std::max(l1 - kPixelVariance, kMomentFloor) *
+                                          std::max(l2 - kPixelVariance, kMomentFloor));
     const double fill = area / ellipse_area;
     if (circ < opt.min_circularity) {
       reject("circularity " + std::to_string(circ).substr(0, 4));
@@ -237,11 +256,13 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       reject("fill ratio " + std::to_string(fill).substr(0, 4));
       continue;
     }
-    // Intensity-weighted centre over the blob's box grown by 2 px: background level from
-    // the box border (median), marker level from the darkest (brightest) quarter of the
-    // foreground pixels inside the box.
-    const int x0 = std::max(0, bx - 2), y0 = std::max(0, by - 2);
-    const int x1 = std::min(view.cols - 1, bx + bw + 1), y1 = std::min(view.rows - 1, by + bh + 1);
+    // Intensity-weighted centre over the blob's box grown by kCentroidMarginPx: background
+    // level from the box border (median), marker level from the darkest (brightest)
+    // quarter of the foreground pixels inside the box.
+    const int g = kCentroidMarginPx;
+    const int x0 = std::max(0, bx - g), y0 = std::max(0, by - g);
+    const int x1 = std::min(view.cols - 1, bx + bw - 1 + g);
+    const int y1 = std::min(view.rows - 1, by + bh - 1 + g);
     thread_local std::vector<double> border, inner;
     border.clear();
     inner.clear();
@@ -262,7 +283,7 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
         if (opt.dark_on_light ? row[x] <= thr : row[x] > thr) inner.push_back(row[x]);
       }
     }
-    const size_t q = inner.size() / 4;
+    const size_t q = inner.size() / kForegroundQuantileDivisor;
     if (opt.dark_on_light) {
       std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end());
     } else {
@@ -332,7 +353,7 @@ bool IdentifyTarget(const CameraModel& cam, const TargetLayout& layout,
       const Eigen::Matrix2d A = ZW * WW.inverse();
       if (A.determinant() <= 0) return;
       Eigen::JacobiSVD<Eigen::Matrix2d> svd(A);
-      if (svd.singularValues()[1] < 0.2 * svd.singularValues()[0]) return;  // beyond ~78 deg
+      if (svd.singularValues()[1] < kMinAffineSingularRatio * svd.singularValues()[0]) return;
       double res = 0, scale = 0;
       for (size_t i = 0; i < m; ++i) {
         const Eigen::Vector2d w(layout.markers[i].x() - lc.x(), -(layout.markers[i].y() - lc.y()));

@@ -118,7 +118,7 @@ struct RobotOptions {
 struct FilterOptions {
   std::string type = "dd2";         // dd2 | ekf | ukf
   std::vector<double> control_psd;  // per control channel; empty: zeros
-  std::array<double, 3> pose_psd{0.0, 0.0, 0.0};
+  std::array<double, kPoseDim> pose_psd{0.0, 0.0, 0.0};
   double max_pose_gap_s = 1.0;      // a longer gap starts a new run (pose reset)
   double params_rate_hz = 10.0;     // params_t publish rate (0: every update)
   double control_history_s = 10.0;  // control samples kept behind the filter
