@@ -147,7 +147,6 @@ class V4l2Source final : public FrameSource {
         (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
     if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) return Refuse("not a video capture device");
     if (!(caps & V4L2_CAP_STREAMING)) return Refuse("does not support streaming I/O");
-    card_ = reinterpret_cast<const char*>(cap.card);
     return {};
   }
 
@@ -285,7 +284,6 @@ class V4l2Source final : public FrameSource {
   V4l2Options opt_;
   int fd_ = -1;
   bool streaming_ = false;
-  std::string card_;
   std::vector<Buffer> buffers_;
   PixelFormat format_ = PixelFormat::kGrey;
   int width_ = 0, height_ = 0, stride_ = 0;
