@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 
+#include "daemon/daemon_test_util.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
 #include "kincal/estimation/online_calibrator.h"
@@ -18,46 +19,7 @@
 namespace kincal::daemon {
 namespace {
 
-const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
-
-std::string TempPath(const std::string& name) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("kincal_faults_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
-
-DaemonConfig SimConfig(double duration_s) {
-  DaemonConfig c = LoadDaemonConfig(kConfigDir + "/kincald_sim.yaml");
-  c.lcm.url = "memq://";
-  c.sim.speed = 0;
-  c.sim.duration_s = duration_s;
-  return c;
-}
-
-std::map<std::string, double> Truth(const DaemonConfig& c) {
-  return LoadScenario(c.sim.scenario).truth;
-}
-
-// Normalised parameter error against the truth.
-double Nnde(const Checkpoint& e, const std::map<std::string, double>& truth) {
-  double s = 0;
-  for (size_t i = 0; i < e.names.size(); ++i) {
-    const double t = truth.at(e.names[i]);
-    s += std::pow((e.values[i] - t) / t, 2);
-  }
-  return std::sqrt(s);
-}
-
-void ExpectWithin3Sigma(const Checkpoint& e, const std::map<std::string, double>& truth) {
-  ASSERT_FALSE(e.names.empty());
-  for (size_t i = 0; i < e.names.size(); ++i) {
-    const double sigma = std::sqrt(e.covariance(static_cast<int>(i), static_cast<int>(i)));
-    EXPECT_LT(std::abs(e.values[i] - truth.at(e.names[i])), 3 * sigma)
-        << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth "
-        << truth.at(e.names[i]);
-  }
-}
+using namespace test_util;
 
 struct Event {
   std::string channel;

@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "daemon/daemon_test_util.h"
+
 namespace kincal::daemon {
 namespace {
 
@@ -114,6 +116,60 @@ TEST(Config, EachSectionSaysWhatItExpects) {
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_EQ(error, "target.height_m must be >= 0 and below the camera");
   EXPECT_THROW(Validate(c), std::runtime_error);
+}
+
+// The same through the daemon's own checks, on every shipped config and on bad files.
+TEST(DaemonConfig, EveryShippedConfigLoadsAndValidates) {
+  int n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(kConfigDir)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("kincald_", 0) != 0) continue;
+    SCOPED_TRACE(name);
+    DaemonConfig c;
+    ASSERT_NO_THROW(c = LoadDaemonConfig(e.path().string()));
+    EXPECT_NO_THROW(Validate(c));
+    ++n;
+  }
+  EXPECT_GE(n, 4);  // sim, v4l2, libcamera, thesis
+}
+
+TEST(DaemonConfig, UnknownKeyNamesFileLineAndTheKnownKeys) {
+  const std::string path = test_util::TempPath("bad.yaml");
+  std::ofstream(path) << "source: sim\nfilter:\n  type: dd2\n  kappa: 3\n";
+  try {
+    LoadDaemonConfig(path);
+    FAIL() << "accepted an unknown key";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.yaml:4: unknown key 'filter.kappa'"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("max_pose_gap_s"), std::string::npos) << e.what();
+  }
+}
+
+TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
+  const std::string path = test_util::TempPath("bad_type.yaml");
+  std::ofstream(path) << "v4l2:\n  width: wide\n";
+  try {
+    LoadDaemonConfig(path);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("bad_type.yaml:2: key 'v4l2.width'"), std::string::npos)
+        << e.what();
+  }
+  DaemonConfig c;
+  c.source = SourceKind::kV4l2;
+  c.v4l2.buffers = 2;
+  EXPECT_THROW(Validate(c), std::runtime_error);
+  c = DaemonConfig{};
+  c.robot.guess["wheel_radius"] = 0.1;
+  try {
+    Validate(c);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("no parameter 'wheel_radius'"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -1,0 +1,63 @@
+// Shared by the daemon's tests: scratch paths, the simulated robot's config and truth, and
+// the checks of an estimate against the truth.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "kincal/daemon/checkpoint.h"
+#include "kincal/daemon/config.h"
+#include "kincal/scenario.h"
+
+namespace kincal::daemon::test_util {
+
+inline const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
+
+// A file in this process's scratch folder.
+inline std::string TempPath(const std::string& name) {
+  const auto dir =
+      std::filesystem::temp_directory_path() / ("kincal_test_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+// The shipped simulated robot, on memq://, as fast as possible (lossless).
+inline DaemonConfig SimConfig(double duration_s) {
+  DaemonConfig c = LoadDaemonConfig(kConfigDir + "/kincald_sim.yaml");
+  c.lcm.url = "memq://";
+  c.sim.speed = 0;
+  c.sim.duration_s = duration_s;
+  return c;
+}
+
+inline std::map<std::string, double> Truth(const DaemonConfig& c) {
+  return LoadScenario(c.sim.scenario).truth;
+}
+
+// Normalised parameter error against the truth.
+inline double Nnde(const Checkpoint& e, const std::map<std::string, double>& truth) {
+  double s = 0;
+  for (size_t i = 0; i < e.names.size(); ++i) {
+    const double t = truth.at(e.names[i]);
+    s += std::pow((e.values[i] - t) / t, 2);
+  }
+  return std::sqrt(s);
+}
+
+// Every parameter within 3 of its sigmas of the truth.
+inline void ExpectWithin3Sigma(const Checkpoint& e, const std::map<std::string, double>& truth) {
+  ASSERT_FALSE(e.names.empty());
+  for (size_t i = 0; i < e.names.size(); ++i) {
+    const double sigma = std::sqrt(e.covariance(static_cast<int>(i), static_cast<int>(i)));
+    EXPECT_LT(std::abs(e.values[i] - truth.at(e.names[i])), 3 * sigma)
+        << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth "
+        << truth.at(e.names[i]);
+  }
+}
+
+}  // namespace kincal::daemon::test_util
