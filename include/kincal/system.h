@@ -41,7 +41,7 @@ class System {
   const std::shared_ptr<const KinematicModel>& model_ptr() const { return model_; }
   const std::vector<std::shared_ptr<const Effect>>& effects() const { return effects_; }
 
-  static constexpr int kPoseDim = 3;
+  static constexpr int kPoseDim = ::kincal::kPoseDim;  // x, y, theta (kincal/types.h)
   int num_model_params() const { return model_->num_params(); }
   // Model + effect parameters.
   int num_params() const { return num_params_; }
