@@ -64,7 +64,8 @@ class Daemon {
   Daemon& operator=(const Daemon&) = delete;
 
   // Runs until the source ends or Stop() is called; then drains the queues, publishes
-  // the final estimate, writes the checkpoint and closes the log. Returns 0 on success.
+  // the final estimate, writes the checkpoint and closes the log. Returns 0 on success, 1
+  // when the source could not start or a pipeline thread failed (the reason is logged).
   int Run();
   // Thread-safe; may be called before Run() returns from any thread.
   void Stop();
