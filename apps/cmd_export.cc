@@ -58,18 +58,7 @@ Command AddExport(CLI::App& app) {
         std::cerr << "kincal export: " << bad << " undecodable events on " << a->channel
                   << " skipped\n";
       for (const auto& p : file.problems()) std::cerr << "kincal export: " << p << "\n";
-      c.model = last.model;
-      c.filter = last.estimator;
-      c.utime = last.utime;
-      c.update_count = last.update_count;
-      c.names = last.names;
-      c.units = last.units;
-      c.values = last.values;
-      const int n = last.num_params;
-      c.covariance.resize(n, n);
-      for (int i = 0; i < n; ++i)
-        for (int k = 0; k < n; ++k)
-          c.covariance(i, k) = last.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
+      daemon::FillCheckpoint(last, {}, &c);
       source = a->log + " (" + a->channel + ")";
     } else {
       throw std::runtime_error("give --checkpoint FILE or --log FILE");

@@ -9,11 +9,31 @@
 #include <cstring>
 #include <fstream>
 #include <iomanip>
+#include <kincal/params_t.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 
 namespace kincal::daemon {
+
+void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
+                    Checkpoint* c) {
+  c->model = m.model;
+  c->effects = effects;
+  c->filter = m.estimator;
+  c->utime = m.utime;
+  c->update_count = m.update_count;
+  c->names = m.names;
+  c->units = m.units;
+  c->values = m.values;
+  const int n = m.num_params;
+  c->covariance.resize(n, n);
+  for (int i = 0; i < n; ++i) {
+    for (int k = 0; k < n; ++k) {
+      c->covariance(i, k) = m.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
+    }
+  }
+}
 
 void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
   nlohmann::json j;

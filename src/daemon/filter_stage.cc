@@ -285,26 +285,17 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
   if (!cal_ || !cal_->initialized()) return;
   if (!force && t - last_params_ns_ < params_every_ns_) return;
   last_params_ns_ = t;
-  const int np = sys_.num_params();
-  const StateMat C = cal_->params_covariance();
-  bool converged = true;
-  for (int i = 0; i < np; ++i) {
-    converged =
-        converged && std::sqrt(std::max(0.0, C(i, i))) < kConvergedSigmaFraction * prior_sigma_[i];
-  }
   kincal::params_t& m = params_msg_;
-  FillParamsMessage(sys_, cal_->params(), C, cal_->filter_name(), cal_->update_count(),
-                    static_cast<int8_t>(ParamsStatus(converged)), PipelineNsToUtime(t), &m);
+  FillParamsMessage(sys_, cal_->params(), cal_->params_covariance(), cal_->filter_name(),
+                    cal_->update_count(), PipelineNsToUtime(t), &m);
+  bool converged = true;
+  for (size_t i = 0; i < m.sigmas.size(); ++i) {
+    converged =
+        converged && m.sigmas[i] < kConvergedSigmaFraction * prior_sigma_[static_cast<int>(i)];
+  }
+  m.status = static_cast<int8_t>(ParamsStatus(converged));
   out_.params(m.utime, m);
-  estimate_.model = m.model;
-  estimate_.effects = opt_.effects;
-  estimate_.filter = m.estimator;
-  estimate_.utime = m.utime;
-  estimate_.update_count = m.update_count;
-  estimate_.names = m.names;
-  estimate_.units = m.units;
-  estimate_.values = m.values;
-  estimate_.covariance = C.topLeftCorner(np, np);
+  FillCheckpoint(m, opt_.effects, &estimate_);
   out_.estimate(estimate_);
 }
 

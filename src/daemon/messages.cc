@@ -59,8 +59,8 @@ void FillMarkersMessage(const PoseSample& p, double sigma_px, kincal::markers_t*
 }
 
 void FillParamsMessage(const System& sys, const StateVec& state, const StateMat& covariance,
-                       std::string_view estimator, int64_t update_count, int8_t status,
-                       int64_t utime, kincal::params_t* m) {
+                       std::string_view estimator, int64_t update_count, int64_t utime,
+                       kincal::params_t* m) {
   const size_t n = static_cast<size_t>(sys.num_params());
   m->schema_version = 1;
   m->utime = utime;
@@ -82,7 +82,6 @@ void FillParamsMessage(const System& sys, const StateVec& state, const StateMat&
     for (size_t k = 0; k < n; ++k) m->covariance[i][k] = covariance(a, static_cast<int>(k));
   }
   m->update_count = update_count;
-  m->status = status;
 }
 
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,

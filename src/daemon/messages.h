@@ -28,11 +28,11 @@ void FillFrameMessage(const Frame& f, FrameEncoding encoding, std::vector<uint8_
                       kincal::frame_t* m);
 void FillPoseMessage(const PoseSample& p, kincal::pose_t* m);
 void FillMarkersMessage(const PoseSample& p, double sigma_px, kincal::markers_t* m);
-// The parameter block of a state: values, sigmas and covariance, by name and unit.
-// `status` is one of params_t::STATUS_*.
+// The parameter block of a state: values, sigmas and covariance, by name and unit. The
+// status (params_t::STATUS_*) is the caller's to set.
 void FillParamsMessage(const System& sys, const StateVec& state, const StateMat& covariance,
-                       std::string_view estimator, int64_t update_count, int8_t status,
-                       int64_t utime, kincal::params_t* m);
+                       std::string_view estimator, int64_t update_count, int64_t utime,
+                       kincal::params_t* m);
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
                                         int64_t utime);
 // The counters, whole, into a health message (the status fields are the caller's).

@@ -10,6 +10,10 @@
 #include <string>
 #include <vector>
 
+namespace kincal {
+class params_t;  // generated from lcm/params_t.lcm
+}
+
 namespace kincal::daemon {
 
 struct Checkpoint {
@@ -22,6 +26,11 @@ struct Checkpoint {
   std::vector<double> values;
   Eigen::MatrixXd covariance;  // names.size() square
 };
+
+// The estimate a kincal.params_t carries (model, filter, time, values and covariance by
+// name); `effects` are not in the message. Reuses *c's storage.
+void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
+                    Checkpoint* c);
 
 // Throws std::runtime_error naming the path on I/O failure.
 void WriteCheckpoint(const std::string& path, const Checkpoint& c);
