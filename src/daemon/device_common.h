@@ -1,11 +1,9 @@
 // What the device sources (V4L2, libcamera) share: counting the frames a device lost from
-// gaps in its sequence numbers, and reopening after a failure.
+// gaps in its sequence numbers.
 #pragma once
 
 #include <atomic>
 #include <cstdint>
-#include <functional>
-#include <string>
 
 #include "kincal/daemon/frame_source.h"
 
@@ -29,13 +27,5 @@ class SequenceGaps {
   uint32_t last_ = 0;
   bool have_last_ = false;
 };
-
-// Closes a device and starts it again; the start's status (an error while the device is
-// still not there).
-inline Status ReopenDevice(const std::function<void()>& close,
-                           const std::function<Status()>& start) {
-  close();
-  return start();
-}
 
 }  // namespace kincal::daemon

@@ -95,13 +95,13 @@ class LibcameraSource final : public FrameSource {
   }
   int64_t device_drops() const override { return gaps_.drops(); }
   Status Reopen() override {
-    auto close = [this] {
-      Close();
+    Close();
+    {
       std::lock_guard lock(mu_);
       done_.clear();
-      gaps_.Restart();
-    };
-    return ReopenDevice(close, [this] { return Start(); });
+    }
+    gaps_.Restart();  // a reopened camera numbers its frames anew
+    return Start();
   }
 
  private:

@@ -130,11 +130,9 @@ class V4l2Source final : public FrameSource {
   void Stop() override { stop_.store(true); }
   int64_t device_drops() const override { return gaps_.drops(); }
   Status Reopen() override {
-    auto close = [this] {
-      Close();
-      gaps_.Restart();
-    };
-    return ReopenDevice(close, [this] { return Start(); });
+    Close();
+    gaps_.Restart();  // a reopened device numbers its frames anew
+    return Start();
   }
 
  private:
