@@ -33,11 +33,14 @@ ModelCheck::ModelCheck(const System& sys, ModelCheckOptions options)
   if (!options_.IsValid(&error)) throw std::invalid_argument("ModelCheck: " + error);
   // Every registered effect that applies to the model, for each term of its signature this
   // check measures (the signatures are the effects' own: kincal/signature.h).
+  std::vector<std::pair<std::string, std::vector<SignatureTerm>>> signatures;
+  for (const auto& name : EffectRegistry::Instance().Names()) {
+    const auto effect = EffectRegistry::Instance().Create(name);
+    if (effect->AppliesTo(sys_.model())) signatures.emplace_back(name, effect->signature());
+  }
   for (int k = 0; k < kNumOnlineTerms; ++k) {
-    for (const auto& name : EffectRegistry::Instance().Names()) {
-      const auto effect = EffectRegistry::Instance().Create(name);
-      if (!effect->AppliesTo(sys_.model())) continue;
-      for (const auto& term : effect->signature()) {
+    for (const auto& [name, signature] : signatures) {
+      for (const auto& term : signature) {
         if (term.component == kOnlineTerms[k].term.component &&
             term.regressor == kOnlineTerms[k].term.regressor) {
           suspects_.push_back({name, k});
