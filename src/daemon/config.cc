@@ -443,7 +443,7 @@ bool DaemonConfig::IsValid(std::string* error) const {
   }
   if (!pose.IsValid(error) || !robot.IsValid(error) || !filter.IsValid(error)) return false;
   if (!filter.control_psd.empty()) {
-    const int controls = MakeSystem(robot.model, robot.effects).num_controls();
+    const int controls = MakeModel(robot.model)->num_controls();  // robot.IsValid: it exists
     if (!Expect(static_cast<int>(filter.control_psd.size()) == controls,
                 "filter.control_psd needs " + std::to_string(controls) + " values for model " +
                     robot.model,
