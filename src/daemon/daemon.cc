@@ -471,24 +471,9 @@ int Daemon::Run() {
   d.source->Stop();
   d.PublishHealth(period.count());
   if (d.recorder) d.recorder->Close();
-  LogSummary(counters());
+  spdlog::info("kincald: {}", SummaryLine(counters()));
   std::lock_guard lock(d.status_mu);
   return d.source_error.empty() ? 0 : 1;
-}
-
-void Daemon::LogSummary(const DaemonCounters& c) {
-  spdlog::info(
-      "kincald: {} frames ({} dropped by the device, {} by the queue, {} bad, {} out of order), "
-      "{} valid poses ({} dropped by the queue), {} updates, {} gated, {} runs, {} filter "
-      "resets, {} time resets, {} source restarts; {} controls ({} rejected, {} out of order, "
-      "{} late, {} dropped by the queue); log {} written / {} lost; latency p50 {:.3f} ms p99 "
-      "{:.3f} ms",
-      c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frames_bad,
-      c.frames_out_of_order, c.poses_valid, c.poses_dropped_queue, c.updates, c.poses_gated,
-      c.run_resets + (c.updates > 0 ? 1 : 0), c.filter_resets, c.time_resets, c.source_restarts,
-      c.controls_received, c.messages_rejected, c.controls_out_of_order, c.controls_late,
-      c.controls_dropped_queue, c.log_events_written, c.log_events_lost, c.latency_p50_ms,
-      c.latency_p99_ms);
 }
 
 Checkpoint Daemon::Estimate() const {

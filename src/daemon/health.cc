@@ -1,5 +1,7 @@
 #include "daemon/health.h"
 
+#include <spdlog/spdlog.h>
+
 #include "daemon/messages.h"
 
 namespace kincal::daemon {
@@ -15,6 +17,21 @@ class Problems {
 };
 
 }  // namespace
+
+std::string SummaryLine(const DaemonCounters& c) {
+  return fmt::format(
+      "{} frames ({} dropped by the device, {} by the queue, {} bad, {} out of order), "
+      "{} valid poses ({} dropped by the queue), {} updates, {} gated, {} runs, {} filter "
+      "resets, {} time resets, {} source restarts; {} controls ({} rejected, {} out of order, "
+      "{} late, {} dropped by the queue); log {} written / {} lost; latency p50 {:.3f} ms p99 "
+      "{:.3f} ms",
+      c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frames_bad,
+      c.frames_out_of_order, c.poses_valid, c.poses_dropped_queue, c.updates, c.poses_gated,
+      c.run_resets + (c.updates > 0 ? 1 : 0), c.filter_resets, c.time_resets, c.source_restarts,
+      c.controls_received, c.messages_rejected, c.controls_out_of_order, c.controls_late,
+      c.controls_dropped_queue, c.log_events_written, c.log_events_lost, c.latency_p50_ms,
+      c.latency_p99_ms);
+}
 
 void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
                            int64_t utime, kincal::health_t* h) {

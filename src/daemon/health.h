@@ -24,6 +24,9 @@ struct HealthStatus {
   double latency_p50_ms = 0, latency_p99_ms = 0;  // since the last message
 };
 
+// The whole run in one line (the daemon logs it when it stops).
+std::string SummaryLine(const DaemonCounters& c);
+
 class HealthReporter {
  public:
   // Silence on the camera longer than this is reported.

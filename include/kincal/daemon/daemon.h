@@ -75,7 +75,6 @@ class Daemon {
   DaemonCounters counters() const;
 
  private:
-  static void LogSummary(const DaemonCounters& c);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
