@@ -2,6 +2,8 @@
 // lacks, add them, and report the error before and after.
 #include <unistd.h>
 
+#include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <iomanip>
@@ -21,15 +23,13 @@ std::map<std::string, double> ParseInit(const std::string& text) {
     const auto eq = item.find('=');
     if (eq == std::string::npos)
       throw std::runtime_error("--init: expected name=value, got '" + item + "'");
-    try {
-      size_t used = 0;
-      const double v = std::stod(item.substr(eq + 1), &used);
-      if (used != item.size() - eq - 1) throw std::invalid_argument("trailing text");
-      out[item.substr(0, eq)] = v;
-    } catch (const std::exception&) {
-      throw std::runtime_error("--init: '" + item.substr(eq + 1) + "' is not a number (in '" +
-                               item + "')");
+    const std::string value = item.substr(eq + 1);
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+    if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) {
+      throw std::runtime_error("--init: '" + value + "' is not a number (in '" + item + "')");
     }
+    out[item.substr(0, eq)] = v;
   }
   return out;
 }

@@ -28,6 +28,7 @@
 #include "kincal/model.h"
 #include "kincal/registry.h"
 #include "kincal/signature.h"
+#include "kincal/status.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -186,11 +187,15 @@ class EffectImpl : public Effect {
 
 using EffectRegistry = Registry<Effect>;
 
-// Creates and binds an effect; throws std::invalid_argument with a clear message when the
-// name is unknown, the effect does not apply to the model, or the channels are invalid.
-std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model);
-
+// Creates and binds an effect; an error names the effect and says why: the name is
+// unknown, the effect does not apply to the model, or the channels are invalid.
+Status MakeEffect(const EffectSpec& spec, const KinematicModel& model,
+                  std::unique_ptr<Effect>* out);
 // Parses "name" or "name[ch1,ch2]" into a spec.
+Status ParseEffectSpec(std::string_view text, EffectSpec* out);
+
+// Convenience forms of the two: throw std::invalid_argument with the same messages.
+std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model);
 EffectSpec ParseEffectSpec(std::string_view text);
 
 }  // namespace kincal

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "kincal/registry.h"
+#include "kincal/status.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -76,7 +77,9 @@ class ModelImpl : public KinematicModel {
 
 using ModelRegistry = Registry<KinematicModel>;
 
-// Convenience: throws std::invalid_argument naming the known models if `name` is unknown.
+// Creates a registered model; an unknown name is an error naming the known models.
+Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* out);
+// Convenience: throws std::invalid_argument with the same message.
 std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);
 
 }  // namespace kincal

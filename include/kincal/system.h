@@ -34,8 +34,15 @@ struct SystemOptions {
 
 class System {
  public:
+  // Throws std::invalid_argument when CheckCombination fails (callers with outside input
+  // check first, or use MakeSystem's Status form).
   System(std::shared_ptr<const KinematicModel> model,
          std::vector<std::shared_ptr<const Effect>> effects = {}, SystemOptions options = {});
+  // Whether the effects combine with the model: no parameter name twice (two effects of
+  // the same kind), the augmented state within kMaxState, valid options.
+  static Status CheckCombination(const KinematicModel& model,
+                                 const std::vector<std::shared_ptr<const Effect>>& effects,
+                                 const SystemOptions& options);
 
   const KinematicModel& model() const { return *model_; }
   const std::shared_ptr<const KinematicModel>& model_ptr() const { return model_; }
@@ -110,8 +117,11 @@ class System {
 template <typename T>
 void IntegrateArc(const Twist<T>& tw, const T& dt, T* x, T* y, T* theta);
 
-// Builds a system from a model name and effect specs ("time_offset", "actuator_lag[v]").
-// Throws std::invalid_argument with a clear message on unknown names.
+// Builds a system from a model name and effect specs ("time_offset", "actuator_lag[v]");
+// an error names the unknown model or effect, the bad spec or the conflict.
+Status MakeSystem(std::string_view model, const std::vector<std::string>& effects,
+                  SystemOptions options, std::unique_ptr<System>* out);
+// Convenience: throws std::invalid_argument with the same message.
 System MakeSystem(std::string_view model, const std::vector<std::string>& effects = {},
                   SystemOptions options = {});
 

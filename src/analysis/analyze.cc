@@ -80,11 +80,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
     if (o.progress) o.progress(f, s);
   };
   std::shared_ptr<const KinematicModel> model;
-  try {
-    model = MakeModel(o.model);
-  } catch (const std::exception& e) {
-    throw AnalysisError(e.what());
-  }
+  if (const Status s = MakeModel(o.model, &model); !s.ok()) throw AnalysisError(s.message());
   const System bare(model);
   const Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
   Dataset d = analysis::Prepare(rec, o, &res.warnings);

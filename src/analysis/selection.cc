@@ -79,21 +79,21 @@ FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
 bool TryEffect(const std::string& spec, int round, const SelectionState& current, const Dataset& d,
                const std::shared_ptr<const KinematicModel>& model, double command_lag,
                const AnalyzeOptions& o, Tried* out) {
-  std::shared_ptr<const Effect> eff;
-  std::vector<std::shared_ptr<const Effect>> effects = current.effects;
-  try {
-    eff = MakeEffect(ParseEffectSpec(spec), *model);
-    effects.push_back(eff);
-  } catch (const std::exception& e) {
-    if (o.effects_mode == "list") throw AnalysisError(std::string("--effects: ") + e.what());
-    return false;
+  EffectSpec parsed;
+  std::unique_ptr<Effect> made;
+  Status status = ParseEffectSpec(spec, &parsed);
+  if (status.ok()) status = MakeEffect(parsed, *model, &made);
+  if (!status.ok()) {
+    if (o.effects_mode == "list") throw AnalysisError("--effects: " + status.message());
+    return false;  // a candidate that does not apply to this model
   }
-  std::unique_ptr<System> sys;
-  try {
-    sys = std::make_unique<System>(model, effects);
-  } catch (const std::exception&) {
+  const std::shared_ptr<const Effect> eff = std::move(made);
+  std::vector<std::shared_ptr<const Effect>> effects = current.effects;
+  effects.push_back(eff);
+  if (!System::CheckCombination(*model, effects, {}).ok()) {
     return false;  // conflicts with an accepted effect (same parameters)
   }
+  const auto sys = std::make_unique<System>(model, effects);
   Tried& t = *out;
   t.trial.name = spec;
   t.trial.round = round;

@@ -41,34 +41,37 @@ bool BindChannels(const KinematicModel& model, const std::vector<std::string>& r
   return true;
 }
 
-std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
+Status MakeEffect(const EffectSpec& spec, const KinematicModel& model,
+                  std::unique_ptr<Effect>* out) {
   auto e = EffectRegistry::Instance().Create(spec.name);
   if (!e) {
-    throw std::invalid_argument("unknown effect '" + spec.name +
-                                "' (known: " + EffectRegistry::Instance().KnownList() + ")");
+    return Status::Error("unknown effect '" + spec.name +
+                         "' (known: " + EffectRegistry::Instance().KnownList() + ")");
   }
   if (!e->AppliesTo(model)) {
-    throw std::invalid_argument("effect '" + spec.name + "' does not apply to model '" +
-                                std::string(model.name()) + "'");
+    return Status::Error("effect '" + spec.name + "' does not apply to model '" +
+                         std::string(model.name()) + "'");
   }
   std::string error;
   if (!e->Bind(model, spec.channels, &error)) {
-    throw std::invalid_argument("effect '" + spec.name + "': " + error);
+    return Status::Error("effect '" + spec.name + "': " + error);
   }
-  return e;
+  *out = std::move(e);
+  return {};
 }
 
-EffectSpec ParseEffectSpec(std::string_view text) {
+Status ParseEffectSpec(std::string_view text, EffectSpec* out) {
   EffectSpec spec;
   const auto open = text.find('[');
   if (open == std::string_view::npos) {
     spec.name = std::string(text);
-    return spec;
+    *out = std::move(spec);
+    return {};
   }
   const auto close = text.find(']', open);
   if (close == std::string_view::npos || close != text.size() - 1) {
-    throw std::invalid_argument("effect spec '" + std::string(text) +
-                                "': expected name or name[channel,...]");
+    return Status::Error("effect spec '" + std::string(text) +
+                         "': expected name or name[channel,...]");
   }
   spec.name = std::string(text.substr(0, open));
   std::string_view list = text.substr(open + 1, close - open - 1);
@@ -77,6 +80,23 @@ EffectSpec ParseEffectSpec(std::string_view text) {
     spec.channels.emplace_back(list.substr(0, comma));
     if (comma == std::string_view::npos) break;
     list.remove_prefix(comma + 1);
+  }
+  *out = std::move(spec);
+  return {};
+}
+
+std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
+  std::unique_ptr<Effect> e;
+  if (const Status s = MakeEffect(spec, model, &e); !s.ok()) {
+    throw std::invalid_argument(s.message());
+  }
+  return e;
+}
+
+EffectSpec ParseEffectSpec(std::string_view text) {
+  EffectSpec spec;
+  if (const Status s = ParseEffectSpec(text, &spec); !s.ok()) {
+    throw std::invalid_argument(s.message());
   }
   return spec;
 }

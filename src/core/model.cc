@@ -20,12 +20,18 @@ int KinematicModel::ControlIndex(std::string_view n) const {
   return -1;
 }
 
-std::shared_ptr<const KinematicModel> MakeModel(std::string_view name) {
-  auto m = ModelRegistry::Instance().Create(name);
-  if (!m) {
-    throw std::invalid_argument("unknown model '" + std::string(name) +
-                                "' (known: " + ModelRegistry::Instance().KnownList() + ")");
+Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* out) {
+  *out = ModelRegistry::Instance().Create(name);
+  if (!*out) {
+    return Status::Error("unknown model '" + std::string(name) +
+                         "' (known: " + ModelRegistry::Instance().KnownList() + ")");
   }
+  return {};
+}
+
+std::shared_ptr<const KinematicModel> MakeModel(std::string_view name) {
+  std::shared_ptr<const KinematicModel> m;
+  if (const Status s = MakeModel(name, &m); !s.ok()) throw std::invalid_argument(s.message());
   return m;
 }
 

@@ -37,10 +37,42 @@ template void IntegrateArc<double>(const Twist<double>&, const double&, double*,
 template void IntegrateArc<Jet>(const Twist<Jet>&, const Jet&, Jet*, Jet*, Jet*);
 template void IntegrateArc<BJet>(const Twist<BJet>&, const BJet&, BJet*, BJet*, BJet*);
 
+Status System::CheckCombination(const KinematicModel& model,
+                                const std::vector<std::shared_ptr<const Effect>>& effects,
+                                const SystemOptions& options) {
+  std::vector<std::string> names;
+  int states = 0;
+  for (const auto& p : model.params()) names.push_back(p.name);
+  for (const auto& e : effects) {
+    for (const auto& p : e->params()) {
+      if (std::find(names.begin(), names.end(), p.name) != names.end()) {
+        return Status::Error("parameter name '" + p.name +
+                             "' appears twice (two effects of the same kind?)");
+      }
+      names.push_back(p.name);
+    }
+    states += e->num_states();
+  }
+  if (states > kMaxEffectStates) {
+    return Status::Error(std::to_string(states) + " effect states exceed kMaxEffectStates = " +
+                         std::to_string(kMaxEffectStates));
+  }
+  const int dim = kPoseDim + static_cast<int>(names.size()) + states;
+  if (dim > kMaxState) {
+    return Status::Error("augmented state of " + std::to_string(dim) +
+                         " exceeds kMaxState = " + std::to_string(kMaxState));
+  }
+  if (!(options.max_substep_s > 0.0)) return Status::Error("max_substep_s must be > 0");
+  return {};
+}
+
 System::System(std::shared_ptr<const KinematicModel> model,
                std::vector<std::shared_ptr<const Effect>> effects, SystemOptions options)
     : model_(std::move(model)), effects_(std::move(effects)), options_(options) {
   if (!model_) throw std::invalid_argument("System: null model");
+  if (const Status s = CheckCombination(*model_, effects_, options_); !s.ok()) {
+    throw std::invalid_argument("System: " + s.message());
+  }
   params_ = model_->params();
   int offset = kPoseDim + model_->num_params();
   for (const auto& e : effects_) {
@@ -54,26 +86,6 @@ System::System(std::shared_ptr<const KinematicModel> model,
     effect_state_offset_.push_back(offset);
     offset += e->num_states();
     num_effect_states_ += e->num_states();
-  }
-  for (size_t i = 0; i < params_.size(); ++i) {
-    for (size_t j = 0; j < i; ++j) {
-      if (params_[i].name == params_[j].name) {
-        throw std::invalid_argument("System: parameter name '" + params_[i].name +
-                                    "' appears twice (two effects of the same kind?)");
-      }
-    }
-  }
-  if (num_effect_states_ > kMaxEffectStates) {
-    throw std::invalid_argument(
-        "System: " + std::to_string(num_effect_states_) +
-        " effect states exceed kMaxEffectStates = " + std::to_string(kMaxEffectStates));
-  }
-  if (state_dim() > kMaxState) {
-    throw std::invalid_argument("System: augmented state of " + std::to_string(state_dim()) +
-                                " exceeds kMaxState = " + std::to_string(kMaxState));
-  }
-  if (!(options_.max_substep_s > 0.0)) {
-    throw std::invalid_argument("System: max_substep_s must be > 0");
   }
 }
 
@@ -268,12 +280,30 @@ template void System::InitEffectStates<Jet>(Jet*, const ControlSignal&, double) 
 template double System::Delay<double>(const double*) const;
 template Jet System::Delay<Jet>(const Jet*) const;
 
+Status MakeSystem(std::string_view model, const std::vector<std::string>& effects,
+                  SystemOptions options, std::unique_ptr<System>* out) {
+  std::shared_ptr<const KinematicModel> m;
+  if (Status s = MakeModel(model, &m); !s.ok()) return s;
+  std::vector<std::shared_ptr<const Effect>> list;
+  for (const auto& text : effects) {
+    EffectSpec spec;
+    std::unique_ptr<Effect> e;
+    if (Status s = ParseEffectSpec(text, &spec); !s.ok()) return s;
+    if (Status s = MakeEffect(spec, *m, &e); !s.ok()) return s;
+    list.push_back(std::move(e));
+  }
+  if (Status s = System::CheckCombination(*m, list, options); !s.ok()) return s;
+  *out = std::make_unique<System>(std::move(m), std::move(list), options);
+  return {};
+}
+
 System MakeSystem(std::string_view model, const std::vector<std::string>& effects,
                   SystemOptions options) {
-  auto m = MakeModel(model);
-  std::vector<std::shared_ptr<const Effect>> list;
-  for (const auto& text : effects) list.push_back(MakeEffect(ParseEffectSpec(text), *m));
-  return System(std::move(m), std::move(list), options);
+  std::unique_ptr<System> sys;
+  if (const Status s = MakeSystem(model, effects, options, &sys); !s.ok()) {
+    throw std::invalid_argument(s.message());
+  }
+  return std::move(*sys);
 }
 
 }  // namespace kincal

@@ -355,19 +355,18 @@ bool RobotOptions::IsValid(std::string* error) const {
       !Expect(guess_sigma_fraction > 0, "robot.guess_sigma_fraction must be > 0", error)) {
     return false;
   }
-  try {
-    const System sys = MakeSystem(model, effects);
-    for (const auto& [name, v] : guess) {
-      if (!Expect(
-              sys.ParamIndex(name) >= 0,
-              "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
-              error)) {
-        return false;
-      }
-    }
-  } catch (const std::invalid_argument& e) {
-    *error = std::string("robot: ") + e.what();
+  std::unique_ptr<System> sys;
+  if (const Status s = MakeSystem(model, effects, {}, &sys); !s.ok()) {
+    *error = "robot: " + s.message();
     return false;
+  }
+  for (const auto& [name, v] : guess) {
+    if (!Expect(
+            sys->ParamIndex(name) >= 0,
+            "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
+            error)) {
+      return false;
+    }
   }
   return true;
 }

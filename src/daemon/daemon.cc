@@ -6,21 +6,22 @@
 
 #include <spdlog/spdlog.h>
 
-#include <kincal/frame_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
 #include <optional>
 #include <thread>
 
 #include "daemon/bounded_queue.h"
+#include "daemon/capture_stage.h"
 #include "daemon/control_input.h"
 #include "daemon/counters.h"
 #include "daemon/filter_stage.h"
 #include "daemon/health.h"
 #include "daemon/latency_histogram.h"
 #include "daemon/messages.h"
+#include "daemon/pose_control_merge.h"
 #include "daemon/pose_stage.h"
-#include "daemon/recorder.h"
+#include "daemon/publisher.h"
 #include "daemon/sources.h"
 #include "kincal/scenario.h"
 #include "kincal/system.h"
@@ -30,13 +31,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A live device that failed is reopened after 0.25 s, 0.5 s, ... up to 5 s between tries.
-constexpr double kReopenFirstWaitS = 0.25;
-constexpr double kReopenMaxWaitS = 5.0;
-// The filter thread waits this long for a pose, then looks at the controls again.
-constexpr auto kPoseWait = std::chrono::milliseconds(20);
-// A control clock jump is held this long (live) for the poses to show it too.
-constexpr TimeNs kHeldJumpWaitNs = kNsPerSecond;
 // After a simulated robot's frames end, the last controls it published over LCM arrive.
 constexpr auto kLastControlsWait = std::chrono::milliseconds(200);
 // Poses held while waiting for their controls: at least this many.
@@ -51,9 +45,7 @@ struct Daemon::Impl {
   std::unique_ptr<FrameSource> source;
   SourceCapabilities caps;
 
-  std::unique_ptr<lcm::LCM> lcm;
-  std::mutex lcm_mu;
-  std::unique_ptr<Recorder> recorder;
+  Publisher out;
 
   BoundedQueue<Frame> frame_q;
   BoundedQueue<PoseSample> pose_q;
@@ -64,7 +56,7 @@ struct Daemon::Impl {
   std::atomic<bool> controls_done{false};
   std::atomic<bool> filter_done{false};
   CounterSet counters;
-  std::atomic<TimeNs> last_frame_mono{0};
+  std::unique_ptr<CaptureStage> capture;
 
   std::mutex status_mu;  // guards what follows
   std::string source_error, last_frame_error, last_reject;
@@ -82,37 +74,27 @@ struct Daemon::Impl {
             cfg, vis,
             [this](const void* data, size_t n, int64_t utime) { OnControls(data, n, utime); },
             [this](const std::string& ch, const void* data, size_t n) {
-              PublishRaw(ch, data, n);
+              out.PublishRaw(ch, data, n);
             })),
         caps(source->capabilities()),
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
-        control_q(static_cast<size_t>(cfg.queues.controls), QueuePolicy()) {}
+        control_q(static_cast<size_t>(cfg.queues.controls), QueuePolicy()),
+        capture(std::make_unique<CaptureStage>(
+            source.get(),
+            CaptureOptions{cfg.lcm.frame_channel, cfg.lcm.publish_frames,
+                           cfg.record.frame_encoding},
+            &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })) {}
 
   // Live: fresh data matters more than old (drop the oldest); lossless: block.
   FullPolicy QueuePolicy() const {
     return caps.lossless ? FullPolicy::kBlock : FullPolicy::kDropOldest;
   }
 
-  // ---- output -------------------------------------------------------------------------
-  template <typename Msg>
-  void Publish(const std::string& channel, int64_t utime, const Msg& m, bool network = true) {
-    if (network && lcm) {
-      std::lock_guard lock(lcm_mu);
-      lcm->publish(channel, &m);
-    }
-    if (recorder) recorder->WriteMessage(channel, utime, m);
-  }
-  void PublishRaw(const std::string& channel, const void* data, size_t n) {
-    if (!lcm) return;
-    std::lock_guard lock(lcm_mu);
-    lcm->publish(channel, data, static_cast<unsigned>(n));
-  }
-
   // ---- controls -----------------------------------------------------------------------
   // Every control message, from LCM, the simulated robot or the log, comes through here.
   void OnControls(const void* data, size_t n, int64_t receive_utime) {
-    if (recorder) recorder->Write(cfg.lcm.controls_channel, receive_utime, data, n);
+    out.Record(cfg.lcm.controls_channel, receive_utime, data, n);
     ControlSample s;
     thread_local std::string why;
     const bool sender_stamp = cfg.robot.control_stamp == ControlStamp::kSender;
@@ -130,30 +112,8 @@ struct Daemon::Impl {
 
   // ---- capture thread -----------------------------------------------------------------
   void CaptureLoop() {
-    Frame f;
-    kincal::frame_t msg;
-    std::vector<uint8_t> png;
-    while (!stop.load()) {
-      std::string error;
-      const SourceStatus st = source->Next(&f, 100, &error);
-      if (st == SourceStatus::kEnd) break;
-      if (st == SourceStatus::kTimeout) continue;
-      if (st == SourceStatus::kError) {
-        SetSourceError(error);
-        spdlog::error("source {}: {}", source->name(), error);
-        if (!caps.can_reopen || !ReopenWithBackoff()) break;
-        continue;
-      }
-      counters.frames_captured.fetch_add(1);
-      last_frame_mono.store(MonotonicNs());
-      if (recorder || cfg.lcm.publish_frames) {
-        FillFrameMessage(f, cfg.record.frame_encoding, &png, &msg);
-        Publish(cfg.lcm.frame_channel, f.utime, msg, cfg.lcm.publish_frames);
-      }
-      frame_q.Push(f);
-    }
+    capture->Run(stop);
     source_done.store(true);
-    frame_q.Close();
     if (caps.carries_controls) {
       controls_done.store(true);  // the source carried the controls: there are no more
     } else if (caps.controls_end_with_frames) {
@@ -165,30 +125,6 @@ struct Daemon::Impl {
   void SetSourceError(const std::string& error) {
     std::lock_guard lock(status_mu);
     source_error = error;
-  }
-
-  // A live device failed: close it and open it again, waiting longer each time, until it
-  // is back or the daemon is stopped. Health says so meanwhile.
-  bool ReopenWithBackoff() {
-    double wait_s = kReopenFirstWaitS;
-    while (!stop.load()) {
-      const TimeNs until = MonotonicNs() + SecondsToNs(wait_s);
-      while (!stop.load() && MonotonicNs() < until) {
-        std::this_thread::sleep_for(std::chrono::milliseconds(20));
-      }
-      if (stop.load()) return false;
-      const Status reopened = source->Reopen();
-      if (reopened.ok()) {
-        counters.source_restarts.fetch_add(1);
-        SetSourceError("");
-        spdlog::info("source {}: reopened, capturing again", source->name());
-        return true;
-      }
-      wait_s = std::min(kReopenMaxWaitS, 2 * wait_s);
-      SetSourceError(reopened.message() + " (retrying every " +
-                     std::to_string(wait_s).substr(0, 4) + " s)");
-    }
-    return false;
   }
 
   // ---- detection / pose thread --------------------------------------------------------
@@ -213,11 +149,11 @@ struct Daemon::Impl {
       (p.valid ? counters.poses_valid : counters.poses_invalid).fetch_add(1);
       // Publish the pose (and markers) now: this is the frame-to-publish latency.
       FillPoseMessage(p, &pose_msg);
-      Publish(cfg.lcm.pose_channel, p.utime, pose_msg);
+      out.Publish(cfg.lcm.pose_channel, p.utime, pose_msg);
       counters.poses_published.fetch_add(1);
       if (cfg.lcm.publish_markers) {
         FillMarkersMessage(p, cfg.pose.sigma_px, &markers_msg);
-        Publish(cfg.lcm.markers_channel, p.utime, markers_msg);
+        out.Publish(cfg.lcm.markers_channel, p.utime, markers_msg);
       }
       if (p.arrival_mono_ns > 0) {
         const double ms = NsToSeconds(MonotonicNs() - p.arrival_mono_ns) * 1e3;
@@ -232,24 +168,21 @@ struct Daemon::Impl {
 
   // ---- filter thread ------------------------------------------------------------------
   FilterOutputs StageOutputs() {
-    FilterOutputs out;
-    out.params = [this](int64_t utime, const kincal::params_t& m) {
-      Publish(cfg.lcm.params_channel, utime, m);
+    FilterOutputs o;
+    o.params = [this](int64_t utime, const kincal::params_t& m) {
+      out.Publish(cfg.lcm.params_channel, utime, m);
     };
-    out.model_check = [this](int64_t utime, const kincal::model_check_t& m) {
-      Publish(cfg.lcm.model_check_channel, utime, m);
+    o.model_check = [this](int64_t utime, const kincal::model_check_t& m) {
+      out.Publish(cfg.lcm.model_check_channel, utime, m);
     };
-    out.estimate = [this](const Checkpoint& ck) {
+    o.estimate = [this](const Checkpoint& ck) {
       std::lock_guard lock(status_mu);
       estimate = ck;
     };
-    out.checkpoint_due = [this] { WriteCheckpointLogged(); };
-    return out;
+    o.checkpoint_due = [this] { WriteCheckpointLogged(); };
+    return o;
   }
 
-  // Merges poses and controls in time order: a pose goes to the filter stage once the
-  // controls up to its time are in, or the controls have ended, or (live) it has waited
-  // robot.max_control_delay_s.
   void FilterLoop() {
     FilterPrior prior = ConfiguredPrior(sys, cfg.robot, cfg.file);
     if (resume) {
@@ -260,48 +193,15 @@ struct Daemon::Impl {
     FilterStage stage(
         sys, FilterStageOptionsFrom(cfg), std::move(prior),
         [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters);
-    PoseRing pending(static_cast<size_t>(std::max(4 * cfg.queues.poses, kMinPendingPoses)));
-    const TimeNs max_delay_ns = SecondsToNs(cfg.robot.max_control_delay_s);
-    const bool lossless = caps.lossless;
-    PoseSample p;
-    while (true) {
-      const bool got = pose_q.Pop(p, kPoseWait);
-      stage.DrainControls(MonotonicNs());
-      if (got) {
-        if (pending.full()) {  // hold no more: use the oldest with what we have
-          stage.AddPose(pending.front(), MonotonicNs());
-          pending.pop();
-        }
-        pending.push(p);
-      }
-      const bool poses_over = !got && pose_q.closed_and_empty();
-      const bool no_more_controls =
-          controls_done.load() && control_q.size() == 0 && !stage.holding_jump();
-      if (no_more_controls) stage.DrainControls(MonotonicNs());
-      // The controls jumped back and the poses did not follow: the controls alone start
-      // the new time base (live after a while; lossless when the poses have ended).
-      if (stage.holding_jump() && pending.empty() &&
-          (poses_over ||
-           (!lossless && MonotonicNs() - stage.held_since_mono_ns() > kHeldJumpWaitNs))) {
-        stage.TakeControlJump(MonotonicNs());
-      }
-      while (!pending.empty()) {
-        const PoseSample& f = pending.front();
-        const bool waited = !lossless && MonotonicNs() - f.arrival_mono_ns > max_delay_ns;
-        if (!(stage.ControlsCover(f) || no_more_controls || (poses_over && stop.load()) ||
-              waited)) {
-          break;
-        }
-        stage.AddPose(f, MonotonicNs());
-        pending.pop();
-      }
-      if (poses_over && (no_more_controls || stop.load() || !lossless)) {
-        stage.DrainControls(MonotonicNs());
-        for (; !pending.empty(); pending.pop()) stage.AddPose(pending.front(), MonotonicNs());
-        break;
-      }
-    }
-    stage.Finish();
+    MergeInputs in;
+    in.poses = &pose_q;
+    in.controls = &control_q;
+    in.controls_done = &controls_done;
+    in.stop = &stop;
+    in.lossless = caps.lossless;
+    in.max_control_delay_ns = SecondsToNs(cfg.robot.max_control_delay_s);
+    in.max_pending_poses = static_cast<size_t>(std::max(4 * cfg.queues.poses, kMinPendingPoses));
+    RunPoseControlMerge(&stage, in);
     filter_done.store(true);
   }
 
@@ -340,10 +240,10 @@ struct Daemon::Impl {
     HealthStatus s;
     s.source_name = source->name();
     s.source_done = source_done.load();
-    s.since_last_frame_ns = MonotonicNs() - last_frame_mono.load();
+    s.since_last_frame_ns = MonotonicNs() - capture->last_frame_mono();
     s.expects_lcm_controls = !caps.carries_controls;
     s.controls_channel = cfg.lcm.controls_channel;
-    if (recorder) s.recorder_error = recorder->error();
+    if (out.recorder()) s.recorder_error = out.recorder()->error();
     {
       std::lock_guard lock(status_mu);
       s.source_error = source_error;
@@ -355,7 +255,7 @@ struct Daemon::Impl {
     }
     kincal::health_t h;
     health.Build(Snapshot(), s, period_s, RealtimeUtime(), &h);
-    Publish(cfg.lcm.health_channel, h.utime, h);
+    out.Publish(cfg.lcm.health_channel, h.utime, h);
     if (!h.message.empty()) spdlog::warn("health: {}", h.message);
   }
 
@@ -367,8 +267,8 @@ struct Daemon::Impl {
     c.frames_bad += source->rejected();
     c.poses_dropped_queue = pose_q.dropped();
     c.controls_dropped_queue = control_q.dropped();
-    c.log_events_written = recorder ? recorder->written() : 0;
-    c.log_events_lost = recorder ? recorder->lost() : 0;
+    c.log_events_written = out.recorder() ? out.recorder()->written() : 0;
+    c.log_events_lost = out.recorder() ? out.recorder()->lost() : 0;
     return c;
   }
 };
@@ -386,19 +286,11 @@ Daemon::Daemon(DaemonConfig config) {
                                std::string(d.sys.model().name()) + "'");
     }
   }
-  d.lcm = std::make_unique<lcm::LCM>(cfg.lcm.url);
-  if (!d.lcm->good()) {
-    throw std::runtime_error(
-        "LCM: cannot open '" + (cfg.lcm.url.empty() ? std::string("default URL") : cfg.lcm.url) +
-        "' (for udpm on loopback: `ip link set lo multicast on` and a 224.0.0.0/4 route)");
-  }
-  if (!cfg.record.path.empty()) {
-    d.recorder = std::make_unique<Recorder>(
-        cfg.record.path, static_cast<size_t>(cfg.queues.recorder),
-        d.caps.lossless ? FullPolicy::kBlock : FullPolicy::kDropNewest, cfg.record.flush_every_s);
-  }
+  const Status opened =
+      d.out.Open(cfg.lcm, cfg.record, static_cast<size_t>(cfg.queues.recorder), d.caps.lossless);
+  if (!opened.ok()) throw std::runtime_error(opened.message());
   if (!d.caps.carries_controls) {
-    d.lcm->subscribeFunction(
+    d.out.lcm()->subscribeFunction(
         cfg.lcm.controls_channel,
         +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Impl* self) {
           // Receive stamp on the pipeline's time base (monotonic, mapped once): an NTP step of
@@ -420,7 +312,7 @@ int Daemon::Run() {
     d.SetSourceError(started.message());
     return 1;
   }
-  d.last_frame_mono.store(MonotonicNs());
+  d.capture->MarkStarted(MonotonicNs());
   spdlog::info("kincald: source {}, model {}{}, filter {}, LCM {}{}", d.source->name(),
                d.cfg.robot.model, d.cfg.robot.effects.empty() ? "" : " + effects",
                d.cfg.filter.type, d.cfg.lcm.url.empty() ? "default" : d.cfg.lcm.url,
@@ -442,7 +334,7 @@ int Daemon::Run() {
   std::thread lcm_thread([&d, subscribe] {
     while (!d.filter_done.load()) {
       if (subscribe) {
-        d.lcm->handleTimeout(50);
+        d.out.lcm()->handleTimeout(50);
       } else {
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
       }
@@ -470,7 +362,7 @@ int Daemon::Run() {
   lcm_thread.join();
   d.source->Stop();
   d.PublishHealth(period.count());
-  if (d.recorder) d.recorder->Close();
+  d.out.CloseLog();
   spdlog::info("kincald: {}", SummaryLine(counters()));
   std::lock_guard lock(d.status_mu);
   return d.source_error.empty() ? 0 : 1;

@@ -7,6 +7,7 @@
 #include <kincal/model_check_t.hpp>
 
 #include "daemon/messages.h"
+#include "kincal/check.h"
 #include "kincal/estimation/batch.h"
 #include "kincal/scenario.h"
 
@@ -94,6 +95,8 @@ FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPr
       batch_window_ns_(SecondsToNs(opt_.filter.batch_window_s)),
       time_base_(max_gap_ns_),
       recent_(kRecentPoses) {
+  std::string invalid;
+  KINCAL_CHECK(opt_.IsValid(&invalid), invalid.c_str());  // the daemon's config was validated
   const FilterOptions& f = opt_.filter;
   calibrator_options_.filter = f.type;
   calibrator_options_.noise.control_psd =

@@ -10,13 +10,19 @@
 
 namespace kincal::daemon {
 
-Recorder::Recorder(const std::string& path, size_t capacity, FullPolicy policy,
-                   double flush_every_s)
-    : path_(path), queue_(capacity, policy), flush_every_s_(flush_every_s) {
+Status Recorder::Open(const std::string& path, size_t capacity, FullPolicy policy,
+                      double flush_every_s, std::unique_ptr<Recorder>* out) {
   lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "w");
-  if (log == nullptr)
-    throw std::runtime_error(path + ": cannot create LCM log: " + std::strerror(errno));
-  log_ = log;
+  if (log == nullptr) {
+    return Status::Error(path + ": cannot create LCM log: " + std::strerror(errno));
+  }
+  out->reset(new Recorder(path, log, capacity, policy, flush_every_s));
+  return {};
+}
+
+Recorder::Recorder(const std::string& path, void* log, size_t capacity, FullPolicy policy,
+                   double flush_every_s)
+    : path_(path), log_(log), queue_(capacity, policy), flush_every_s_(flush_every_s) {
   thread_ = std::thread([this] { Loop(); });
 }
 

@@ -11,12 +11,14 @@
 #include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <thread>
 #include <vector>
 
 #include "daemon/bounded_queue.h"
+#include "kincal/status.h"
 
 namespace kincal::daemon {
 
@@ -29,8 +31,9 @@ class Recorder {
     size_t size = 0;
   };
 
-  // Throws std::runtime_error naming the path if it cannot be created.
-  Recorder(const std::string& path, size_t capacity, FullPolicy policy, double flush_every_s);
+  // Creates the log file; an error names the path and errno's text.
+  static Status Open(const std::string& path, size_t capacity, FullPolicy policy,
+                     double flush_every_s, std::unique_ptr<Recorder>* out);
   ~Recorder();
   Recorder(const Recorder&) = delete;
   Recorder& operator=(const Recorder&) = delete;
@@ -58,6 +61,8 @@ class Recorder {
   std::string error() const;  // last write error, empty if none
 
  private:
+  Recorder(const std::string& path, void* log, size_t capacity, FullPolicy policy,
+           double flush_every_s);
   static Item& Spare();
   bool Enqueue(Item& item, std::string_view channel, int64_t utime, size_t n);
   void Loop();

@@ -4,6 +4,7 @@
 #include <ceres/rotation.h>
 
 #include <Eigen/Dense>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -177,13 +178,11 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
       throw std::runtime_error(where + ": expected 6 values, found " + std::to_string(cols.size()));
     double v[5];
     for (int k = 0; k < 5; ++k) {
-      try {
-        size_t used = 0;
-        v[k] = std::stod(cols[static_cast<size_t>(k + 1)], &used);
-      } catch (const std::exception&) {
+      const std::string& tok = cols[static_cast<size_t>(k + 1)];
+      const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[k]);
+      if (ec != std::errc() || end != tok.data() + tok.size() || !std::isfinite(v[k])) {
         throw std::runtime_error(where + ": column " + std::to_string(k + 2) +
-                                 ": expected a number, got '" + cols[static_cast<size_t>(k + 1)] +
-                                 "'");
+                                 ": expected a number, got '" + tok + "'");
       }
     }
     if (!views.count(cols[0])) {

@@ -24,7 +24,9 @@ using namespace test_util;
 TEST(Recorder, EveryEventIsWrittenAndReadsBack) {
   const std::string path = TempPath("rec.lcm");
   {
-    Recorder rec(path, 64, FullPolicy::kBlock, 0.1);
+    std::unique_ptr<Recorder> opened;
+    ASSERT_TRUE(Recorder::Open(path, 64, FullPolicy::kBlock, 0.1, &opened).ok());
+    Recorder& rec = *opened;
     std::vector<std::thread> producers;
     for (int t = 0; t < 3; ++t) {
       producers.emplace_back([&rec, t] {
@@ -55,7 +57,9 @@ TEST(Recorder, EveryEventIsWrittenAndReadsBack) {
 
 TEST(Recorder, LiveModeCountsWhatAFullQueueDrops) {
   const std::string path = TempPath("rec_drop.lcm");
-  Recorder rec(path, 16, FullPolicy::kDropNewest, 1.0);
+  std::unique_ptr<Recorder> opened;
+  ASSERT_TRUE(Recorder::Open(path, 16, FullPolicy::kDropNewest, 1.0, &opened).ok());
+  Recorder& rec = *opened;
   const std::vector<uint8_t> big(1 << 20, 7);
   for (int i = 0; i < 200; ++i) rec.Write("BIG", i, big.data(), big.size());
   rec.Close();
