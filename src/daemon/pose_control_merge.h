@@ -17,9 +17,9 @@ struct MergeInputs {
   BoundedQueue<ControlSample>* controls = nullptr;
   const std::atomic<bool>* controls_done = nullptr;  // no control will arrive any more
   const std::atomic<bool>* stop = nullptr;
-  bool lossless = false;                // replay --fast: wait for data, never for time
-  TimeNs max_control_delay_ns = 0;      // live: how long a pose waits for its controls
-  size_t max_pending_poses = 256;       // poses held waiting for controls
+  bool lossless = false;            // replay --fast: wait for data, never for time
+  TimeNs max_control_delay_ns = 0;  // live: how long a pose waits for its controls
+  size_t max_pending_poses = 256;   // poses held waiting for controls
 };
 
 // Runs until the poses have ended (and, lossless, the controls too), then Finish()es.

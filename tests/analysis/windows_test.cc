@@ -1,0 +1,98 @@
+#include "analysis/windows.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "kincal/analysis/analyze.h"
+
+namespace kincal::analysis {
+namespace {
+
+// 100 s of poses at 10 Hz with white noise of 2 mm / 4 mrad on a slow circle, controls at
+// 50 Hz over the same span.
+Recording Circle(double pos_sigma, double heading_sigma, double gap_from_s = -1) {
+  Recording rec;
+  rec.source = "synthetic";
+  rec.controls = ControlSignal(2, 0);
+  for (int k = 0; k <= 5000; ++k) {
+    const double u[2] = {0.2, 0.1};
+    rec.controls.Append(SecondsToNs(0.02 * k), u);
+  }
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int k = 0; k < 1000; ++k) {
+    const double t = 0.1 * k;
+    if (gap_from_s >= 0 && t >= gap_from_s && t < gap_from_s + 5) continue;
+    const double th = 0.1 * t;
+    rec.poses.push_back({SecondsToNs(t),
+                         {2 * std::sin(th) + pos_sigma * n(rng),
+                          2 - 2 * std::cos(th) + pos_sigma * n(rng), th + heading_sigma * n(rng)}});
+  }
+  return rec;
+}
+
+AnalyzeOptions Options() {
+  AnalyzeOptions o;
+  o.model = "unicycle";
+  return o;
+}
+
+TEST(Windows, CutsFitAndHeldOutWindowsOfOneHorizon) {
+  const Recording rec = Circle(0.002, 0.004);
+  std::vector<std::string> warnings;
+  const Dataset d = Prepare(rec, Options(), &warnings);
+  EXPECT_TRUE(warnings.empty());
+  EXPECT_NEAR(d.t_split, 0.7 * 99.9, 0.1);
+  // Fit windows: non-overlapping 1 s windows over the first 70 s.
+  EXPECT_EQ(d.fit_windows.size(), 69u);
+  for (const Window& w : d.fit_windows) {
+    EXPECT_NEAR(d.t[static_cast<size_t>(w.end)] - d.t[static_cast<size_t>(w.start)], 1.0, 1e-9);
+    EXPECT_LE(d.t[static_cast<size_t>(w.end)], d.t_split + 1e-9);
+  }
+  // Evaluation windows start at every pose with a horizon end; none straddles the split.
+  for (const Window& w : d.eval) {
+    const bool fit = d.t[static_cast<size_t>(w.end)] <= d.t_split;
+    const bool held = d.t[static_cast<size_t>(w.start)] >= d.t_split;
+    EXPECT_TRUE(fit || held);
+  }
+  EXPECT_GT(d.eval.size(), 950u);
+  // Each fit window gives its start and 8 poses over its span.
+  EXPECT_EQ(d.fit_meas.size(), 9 * d.fit_windows.size());
+}
+
+TEST(Windows, EstimatesThePoseNoiseFromSecondDifferences) {
+  const Dataset d = [] {
+    static const Recording rec = Circle(0.002, 0.004);
+    std::vector<std::string> w;
+    return Prepare(rec, Options(), &w);
+  }();
+  EXPECT_NEAR(d.sigma[0], 0.002, 0.0002);
+  EXPECT_NEAR(d.sigma[1], 0.004, 0.0004);
+}
+
+TEST(Windows, NoWindowSpansAGap) {
+  static const Recording rec = Circle(0.002, 0.004, 30.0);
+  std::vector<std::string> warnings;
+  const Dataset d = Prepare(rec, Options(), &warnings);
+  for (const Window& w : d.eval) {
+    const double t0 = d.t[static_cast<size_t>(w.start)], t1 = d.t[static_cast<size_t>(w.end)];
+    EXPECT_LT(t1 - t0, 1.11) << "a window from " << t0 << " s spans the 5 s gap";
+  }
+}
+
+TEST(Windows, ATooShortRecordingIsAnErrorNamingIt) {
+  Recording rec = Circle(0.002, 0.004);
+  rec.poses.resize(15);
+  std::vector<std::string> warnings;
+  try {
+    Prepare(rec, Options(), &warnings);
+    FAIL() << "expected an AnalysisError";
+  } catch (const AnalysisError& e) {
+    EXPECT_NE(std::string(e.what()).find("synthetic: only 15 poses"), std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace kincal::analysis

@@ -1,0 +1,136 @@
+#include "daemon/messages.h"
+
+#include <gtest/gtest.h>
+
+#include <kincal/frame_t.hpp>
+#include <kincal/health_t.hpp>
+#include <kincal/markers_t.hpp>
+#include <kincal/model_check_t.hpp>
+#include <kincal/params_t.hpp>
+#include <kincal/pose_t.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+namespace kincal::daemon {
+namespace {
+
+// Encodes and decodes a message: what a subscriber receives.
+template <typename Msg>
+Msg RoundTrip(const Msg& m) {
+  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
+  EXPECT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  Msg out;
+  EXPECT_EQ(out.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
+  return out;
+}
+
+TEST(Messages, ParamsCarryValuesSigmasAndTheWholeCovarianceByName) {
+  const System sys = MakeSystem("diffdrive", {"time_offset"});
+  StateVec x = StateVec::Zero(sys.state_dim());
+  const int off = sys.param_offset();
+  x.segment(off, 4) << 0.031, 0.0313, 0.148, 0.12;
+  StateMat P = StateMat::Zero(4, 4);
+  P << 4e-8, 1e-9, 0, 0, 1e-9, 9e-8, 0, 0, 0, 0, 1e-6, 2e-7, 0, 0, 2e-7, 2.5e-5;
+  kincal::params_t m;
+  FillParamsMessage(sys, x.segment(off, 4), P, "dd2", 77, 123456, &m);
+  const kincal::params_t r = RoundTrip(m);
+  ASSERT_EQ(r.num_params, 4);
+  EXPECT_EQ(r.names, (std::vector<std::string>{"r_l", "r_r", "d", "delay_s"}));
+  EXPECT_EQ(r.units[3], "s");
+  EXPECT_DOUBLE_EQ(r.values[3], 0.12);
+  EXPECT_DOUBLE_EQ(r.sigmas[0], 2e-4);
+  EXPECT_DOUBLE_EQ(r.sigmas[3], 5e-3);
+  EXPECT_DOUBLE_EQ(r.covariance[2][3], 2e-7);
+  EXPECT_DOUBLE_EQ(r.covariance[1][0], 1e-9);
+  EXPECT_EQ(r.update_count, 77);
+  EXPECT_EQ(r.utime, 123456);
+  EXPECT_EQ(r.model, "diffdrive");
+  EXPECT_EQ(r.estimator, "dd2");
+}
+
+TEST(Messages, PoseCovarianceIsRowMajorAndMarkersKeepTheirCount) {
+  PoseSample p;
+  p.utime = 10;
+  p.device_utime = 7;
+  p.valid = true;
+  p.xytheta = {1.5, -0.25, 0.3};
+  p.covariance << 1, 2, 3, 4, 5, 6, 7, 8, 9;
+  p.num_markers = 3;
+  for (int i = 0; i < 3; ++i) {
+    p.u[static_cast<size_t>(i)] = 100.0 + i;
+    p.v[static_cast<size_t>(i)] = 50.0 - i;
+    p.id[static_cast<size_t>(i)] = i == 2 ? -1 : i;
+  }
+  kincal::pose_t pm;
+  FillPoseMessage(p, &pm);
+  const auto pr = RoundTrip(pm);
+  EXPECT_DOUBLE_EQ(pr.x, 1.5);
+  EXPECT_DOUBLE_EQ(pr.theta, 0.3);
+  EXPECT_DOUBLE_EQ(pr.covariance[1], 2);  // (0, 1)
+  EXPECT_DOUBLE_EQ(pr.covariance[3], 4);  // (1, 0)
+  EXPECT_EQ(pr.source_utime, 7);
+  EXPECT_EQ(pr.valid, 1);
+  kincal::markers_t mm;
+  FillMarkersMessage(p, 0.05, &mm);
+  const auto mr = RoundTrip(mm);
+  ASSERT_EQ(mr.num_markers, 3);
+  EXPECT_DOUBLE_EQ(mr.u[2], 102.0);
+  EXPECT_DOUBLE_EQ(mr.v[1], 49.0);
+  EXPECT_EQ(mr.id[2], -1);
+  EXPECT_DOUBLE_EQ(mr.sigma_px[0], 0.05);
+}
+
+TEST(Messages, PngFramesDecodeToTheSamePixels) {
+  Frame f;
+  f.width = 40;
+  f.height = 30;
+  f.stride = 40;
+  f.format = PixelFormat::kGrey;
+  f.data.resize(40 * 30);
+  for (size_t i = 0; i < f.data.size(); ++i) f.data[i] = static_cast<uint8_t>((i * 37) % 251);
+  std::vector<uint8_t> png;
+  kincal::frame_t m;
+  FillFrameMessage(f, FrameEncoding::kPng, &png, &m);
+  EXPECT_EQ(m.pixel_format, "PNG");
+  EXPECT_LT(m.size, 40 * 30 + 200);
+  const cv::Mat decoded = cv::imdecode(m.data, cv::IMREAD_GRAYSCALE);
+  ASSERT_EQ(decoded.cols, 40);
+  ASSERT_EQ(decoded.rows, 30);
+  EXPECT_EQ(std::vector<uint8_t>(decoded.datastart, decoded.dataend), f.data);
+  FillFrameMessage(f, FrameEncoding::kRaw, &png, &m);
+  EXPECT_EQ(m.pixel_format, "GREY");
+  EXPECT_EQ(m.data, f.data);
+}
+
+TEST(Messages, HealthCarriesEveryCounter) {
+  DaemonCounters c;
+  int64_t k = 1;
+#define KINCAL_SET(name, meaning) c.name = 1000 + k++;
+  KINCAL_DAEMON_COUNTERS(KINCAL_SET)
+#undef KINCAL_SET
+  kincal::health_t h{};
+  FillHealthCounters(c, &h);
+  const auto r = RoundTrip(h);
+#define KINCAL_EXPECT(name, meaning) EXPECT_EQ(r.name, c.name) << #name;
+  KINCAL_DAEMON_COUNTERS(KINCAL_EXPECT)
+#undef KINCAL_EXPECT
+}
+
+TEST(Messages, ModelCheckCarriesTheVerdict) {
+  ModelCheckVerdict v;
+  v.consistent = false;
+  v.window = 512;
+  v.nis_mean = 9.5;
+  v.suspected_effect = "time_offset";
+  v.confidence = 0.8;
+  v.evidence = "along-track";
+  const auto r = RoundTrip(ModelCheckMessage(v, "unicycle", 99));
+  EXPECT_EQ(r.consistent, 0);
+  EXPECT_EQ(r.window, 512);
+  EXPECT_DOUBLE_EQ(r.nis_mean, 9.5);
+  EXPECT_EQ(r.suspected_effect, "time_offset");
+  EXPECT_EQ(r.model, "unicycle");
+  EXPECT_EQ(r.utime, 99);
+}
+
+}  // namespace
+}  // namespace kincal::daemon
