@@ -1,6 +1,8 @@
 // Decoding and checking of incoming control messages.
 #include "daemon/control_input.h"
 
+#include <spdlog/spdlog.h>
+
 #include <cmath>
 #include <kincal/controls_t.hpp>
 
@@ -61,6 +63,27 @@ bool DecodeControls(const void* data, size_t n, const KinematicModel& model, boo
   }
   *out = s;
   return true;
+}
+
+void ControlReceiver::OnMessage(const void* data, size_t n, int64_t receive_utime) {
+  publisher_.Record(channel_, receive_utime, data, n);
+  ControlSample s;
+  thread_local std::string why;
+  if (!DecodeControls(data, n, model_, use_sender_stamp_, receive_utime, &s, &why)) {
+    if (counters_.messages_rejected.fetch_add(1) == 0) {
+      spdlog::warn("rejected a control message: {}", why);
+    }
+    std::lock_guard lock(mu_);
+    last_reject_ = why;
+    return;
+  }
+  counters_.controls_received.fetch_add(1);
+  out_.Push(s);
+}
+
+std::string ControlReceiver::last_reject() const {
+  std::lock_guard lock(mu_);
+  return last_reject_;
 }
 
 }  // namespace kincal::daemon

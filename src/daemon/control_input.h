@@ -4,8 +4,12 @@
 // model, the channel names and the values. Allocation-free after the first calls.
 #pragma once
 
+#include <mutex>
 #include <string>
 
+#include "daemon/bounded_queue.h"
+#include "daemon/counters.h"
+#include "daemon/publisher.h"
 #include "kincal/daemon/samples.h"
 #include "kincal/model.h"
 
@@ -16,5 +20,32 @@ namespace kincal::daemon {
 // time instead of `receive_utime`.
 bool DecodeControls(const void* data, size_t n, const KinematicModel& model, bool use_sender_stamp,
                     int64_t receive_utime, ControlSample* out, std::string* why);
+
+// Every control message, from LCM, the simulated robot or a log, comes through here: it is
+// recorded as received, decoded, counted, and queued for the filter thread. Thread-safe.
+class ControlReceiver {
+ public:
+  ControlReceiver(const KinematicModel& model, bool use_sender_stamp, std::string channel,
+                  Publisher* publisher, BoundedQueue<ControlSample>* out, CounterSet* counters)
+      : model_(model),
+        use_sender_stamp_(use_sender_stamp),
+        channel_(std::move(channel)),
+        publisher_(*publisher),
+        out_(*out),
+        counters_(*counters) {}
+
+  void OnMessage(const void* data, size_t n, int64_t receive_utime);
+  std::string last_reject() const;
+
+ private:
+  const KinematicModel& model_;
+  const bool use_sender_stamp_;
+  const std::string channel_;
+  Publisher& publisher_;
+  BoundedQueue<ControlSample>& out_;
+  CounterSet& counters_;
+  mutable std::mutex mu_;
+  std::string last_reject_;
+};
 
 }  // namespace kincal::daemon

@@ -6,6 +6,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <kincal/health_t.hpp>
+#include <kincal/model_check_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
 #include <optional>
@@ -15,10 +17,9 @@
 #include "daemon/capture_stage.h"
 #include "daemon/control_input.h"
 #include "daemon/counters.h"
+#include "daemon/detection_stage.h"
 #include "daemon/filter_stage.h"
 #include "daemon/health.h"
-#include "daemon/latency_histogram.h"
-#include "daemon/messages.h"
 #include "daemon/pose_control_merge.h"
 #include "daemon/pose_stage.h"
 #include "daemon/publisher.h"
@@ -56,11 +57,13 @@ struct Daemon::Impl {
   std::atomic<bool> controls_done{false};
   std::atomic<bool> filter_done{false};
   CounterSet counters;
+  ControlReceiver intake;
   std::unique_ptr<CaptureStage> capture;
+  PoseStage pose_stage;
+  DetectionStage detection;
 
   std::mutex status_mu;  // guards what follows
-  std::string source_error, last_frame_error, last_reject;
-  LatencyHistogram latency_total, latency_window;
+  std::string source_error;
   Checkpoint estimate;
 
   std::optional<Checkpoint> resume;
@@ -72,7 +75,7 @@ struct Daemon::Impl {
         vis(LoadVisionSetup(cfg)),
         source(MakeSource(
             cfg, vis,
-            [this](const void* data, size_t n, int64_t utime) { OnControls(data, n, utime); },
+            [this](const void* data, size_t n, int64_t utime) { intake.OnMessage(data, n, utime); },
             [this](const std::string& ch, const void* data, size_t n) {
               out.PublishRaw(ch, data, n);
             })),
@@ -80,34 +83,22 @@ struct Daemon::Impl {
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
         control_q(static_cast<size_t>(cfg.queues.controls), QueuePolicy()),
+        intake(sys.model(), cfg.robot.control_stamp == ControlStamp::kSender,
+               cfg.lcm.controls_channel, &out, &control_q, &counters),
         capture(std::make_unique<CaptureStage>(
             source.get(),
             CaptureOptions{cfg.lcm.frame_channel, cfg.lcm.publish_frames,
                            cfg.record.frame_encoding},
-            &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })) {}
+            &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })),
+        pose_stage(cfg.pose, cfg.detector, vis),
+        detection(&pose_stage,
+                  DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,
+                                   cfg.lcm.publish_markers, cfg.pose.sigma_px},
+                  &out, &frame_q, &pose_q, &counters) {}
 
   // Live: fresh data matters more than old (drop the oldest); lossless: block.
   FullPolicy QueuePolicy() const {
     return caps.lossless ? FullPolicy::kBlock : FullPolicy::kDropOldest;
-  }
-
-  // ---- controls -----------------------------------------------------------------------
-  // Every control message, from LCM, the simulated robot or the log, comes through here.
-  void OnControls(const void* data, size_t n, int64_t receive_utime) {
-    out.Record(cfg.lcm.controls_channel, receive_utime, data, n);
-    ControlSample s;
-    thread_local std::string why;
-    const bool sender_stamp = cfg.robot.control_stamp == ControlStamp::kSender;
-    if (!DecodeControls(data, n, sys.model(), sender_stamp, receive_utime, &s, &why)) {
-      if (counters.messages_rejected.fetch_add(1) == 0) {
-        spdlog::warn("rejected a control message: {}", why);
-      }
-      std::lock_guard lock(status_mu);
-      last_reject = why;
-      return;
-    }
-    counters.controls_received.fetch_add(1);
-    control_q.Push(s);
   }
 
   // ---- capture thread -----------------------------------------------------------------
@@ -127,44 +118,7 @@ struct Daemon::Impl {
     source_error = error;
   }
 
-  // ---- detection / pose thread --------------------------------------------------------
-  void DetectionLoop() {
-    PoseStage stage(cfg.pose, cfg.detector, vis);
-    Frame f;
-    PoseSample p;
-    kincal::pose_t pose_msg{};
-    kincal::markers_t markers_msg{};
-    std::string error;
-    while (true) {
-      if (!frame_q.Pop(f, std::chrono::milliseconds(100))) {
-        if (frame_q.closed_and_empty()) break;
-        continue;
-      }
-      if (!stage.Process(f, &p, &error)) {
-        counters.frames_bad.fetch_add(1);
-        std::lock_guard lock(status_mu);
-        last_frame_error = error;
-        continue;
-      }
-      (p.valid ? counters.poses_valid : counters.poses_invalid).fetch_add(1);
-      // Publish the pose (and markers) now: this is the frame-to-publish latency.
-      FillPoseMessage(p, &pose_msg);
-      out.Publish(cfg.lcm.pose_channel, p.utime, pose_msg);
-      counters.poses_published.fetch_add(1);
-      if (cfg.lcm.publish_markers) {
-        FillMarkersMessage(p, cfg.pose.sigma_px, &markers_msg);
-        out.Publish(cfg.lcm.markers_channel, p.utime, markers_msg);
-      }
-      if (p.arrival_mono_ns > 0) {
-        const double ms = NsToSeconds(MonotonicNs() - p.arrival_mono_ns) * 1e3;
-        std::lock_guard lock(status_mu);
-        latency_total.Add(ms);
-        latency_window.Add(ms);
-      }
-      pose_q.Push(p);
-    }
-    pose_q.Close();
-  }
+  void DetectionLoop() { detection.Run(); }
 
   // ---- filter thread ------------------------------------------------------------------
   FilterOutputs StageOutputs() {
@@ -244,14 +198,14 @@ struct Daemon::Impl {
     s.expects_lcm_controls = !caps.carries_controls;
     s.controls_channel = cfg.lcm.controls_channel;
     if (out.recorder()) s.recorder_error = out.recorder()->error();
+    const DetectionStage::Status det = detection.TakeStatus(/*reset_window=*/true);
+    s.last_frame_error = det.last_frame_error;
+    s.latency_p50_ms = det.window_p50_ms;
+    s.latency_p99_ms = det.window_p99_ms;
+    s.last_reject = intake.last_reject();
     {
       std::lock_guard lock(status_mu);
       s.source_error = source_error;
-      s.last_frame_error = last_frame_error;
-      s.last_reject = last_reject;
-      s.latency_p50_ms = latency_window.Percentile(0.5);
-      s.latency_p99_ms = latency_window.Percentile(0.99);
-      latency_window.Reset();
     }
     kincal::health_t h;
     health.Build(Snapshot(), s, period_s, RealtimeUtime(), &h);
@@ -295,7 +249,7 @@ Daemon::Daemon(DaemonConfig config) {
         +[](const lcm::ReceiveBuffer* rbuf, const std::string&, Impl* self) {
           // Receive stamp on the pipeline's time base (monotonic, mapped once): an NTP step of
           // the realtime clock does not make controls jump against frames.
-          self->OnControls(rbuf->data, rbuf->data_size, PipelineUtime(MonotonicNs()));
+          self->intake.OnMessage(rbuf->data, rbuf->data_size, PipelineUtime(MonotonicNs()));
         },
         &d);
   }
@@ -375,10 +329,10 @@ Checkpoint Daemon::Estimate() const {
 
 DaemonCounters Daemon::counters() const {
   DaemonCounters c = impl_->Snapshot();
-  std::lock_guard lock(impl_->status_mu);
-  c.latency_p50_ms = impl_->latency_total.Percentile(0.5);
-  c.latency_p99_ms = impl_->latency_total.Percentile(0.99);
-  c.latency_max_ms = impl_->latency_total.max_ms();
+  const DetectionStage::Status det = impl_->detection.TakeStatus(/*reset_window=*/false);
+  c.latency_p50_ms = det.total_p50_ms;
+  c.latency_p99_ms = det.total_p99_ms;
+  c.latency_max_ms = det.total_max_ms;
   return c;
 }
 

@@ -140,8 +140,8 @@ inline StageRun RunStage(const StageScenario& sc, FilterStageOptions options) {
       Collect(&run), &counters);
   size_t next_control = 0;
   for (const PoseSample& p : samples.poses) {
-    for (; next_control < samples.controls.size() &&
-           samples.controls[next_control].utime <= p.utime;
+    for (;
+         next_control < samples.controls.size() && samples.controls[next_control].utime <= p.utime;
          ++next_control) {
       queued.push_back(samples.controls[next_control]);
     }
