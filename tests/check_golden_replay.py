@@ -1,6 +1,11 @@
 """Replays tests/data/golden_replay.lcm through kincald and compares what it publishes with
-what the same log held when it was recorded (2026-11-23, before the daemon was split into
-stages): every pose, markers, params and model-check event, stamp and bytes, must be equal.
+what the same log held when it was recorded: every pose, markers, params and model-check
+event, stamp and bytes, must be equal. A refactoring must leave it passing.
+
+Recorded 2026-11-23 before the daemon was split into stages; re-recorded 2026-11-24 when
+the filter stage's behaviour changed on purpose (issue 15: adaptive noise, honest status,
+model_check_t schema 2), by replaying the previous golden log through the new binary:
+  kincald -c tests/data/kincald_golden.yaml --replay OLD --fast --record NEW --lcm-url memq://
 
   check_golden_replay.py KINCALD CONFIG GOLDEN_LOG LCMGEN_PYTHON SCRATCH_DIR
 """

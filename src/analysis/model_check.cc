@@ -1,5 +1,6 @@
 #include "kincal/analysis/model_check.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -52,24 +53,34 @@ ModelCheck::ModelCheck(const System& sys, ModelCheckOptions options)
 
 void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& state,
                      const ControlSignal& u) {
-  if (!update.ok || update.innovation.size() < kPoseDim) return;
+  if (!(update.ok || update.gated) || update.innovation.size() < kPoseDim ||
+      update.innovation_cov.rows() < kPoseDim || !std::isfinite(update.nis)) {
+    return;
+  }
   const double th = state[2];
   const double c = std::cos(th), s = std::sin(th);
-  const double ix = update.innovation[0], iy = update.innovation[1];
+  // Body-frame innovation, whitened by its predicted sigma, clipped.
+  const Eigen::Matrix2d rot = (Eigen::Matrix2d() << c, s, -s, c).finished();
+  const Eigen::Matrix2d s_body =
+      rot * update.innovation_cov.topLeftCorner<2, 2>() * rot.transpose();
+  const Eigen::Vector2d body = rot * update.innovation.head<2>();
+  auto whiten = [](double v, double var) {
+    return var > 0 ? std::clamp(v / std::sqrt(var), -kClipSigmas, kClipSigmas) : 0.0;
+  };
   const double t = u.ToSeconds(t_ns);
   // Commanded body twist now and a lookback earlier (model at the current parameters).
   const double* p = state.data() + sys_.param_offset();
   const Twist<double> now = sys_.model().BodyTwist(p, u.At(t).data());
   const Twist<double> before = sys_.model().BodyTwist(p, u.At(t - options_.lookback_s).data());
-  const double values[kNumSeries] = {c * ix + s * iy,
-                                     -s * ix + c * iy,
-                                     update.innovation[2],
+  const double values[kNumSeries] = {whiten(body.x(), s_body(0, 0)),
+                                     whiten(body.y(), s_body(1, 1)),
+                                     whiten(update.innovation[2], update.innovation_cov(2, 2)),
                                      now.vx - before.vx,
                                      now.omega - before.omega,
                                      now.omega,
                                      std::abs(now.omega),
                                      (std::abs(now.vx) + std::abs(now.omega)) > 1e-9 ? 1.0 : 0.0,
-                                     update.nis};
+                                     std::min(update.nis, kClipSigmas * kClipSigmas)};
   for (int k = 0; k < kNumSeries; ++k)
     data_[static_cast<size_t>(k)][static_cast<size_t>(next_)] = values[k];
   next_ = (next_ + 1) % kWindow;
@@ -79,7 +90,11 @@ void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& st
 ModelCheckVerdict ModelCheck::Verdict() const {
   ModelCheckVerdict v;
   v.window = count_;
-  if (count_ == 0) return v;
+  v.window_capacity = kWindow;
+  if (count_ == 0) {
+    v.evidence = "no innovations yet";
+    return v;
+  }
   const int n = count_;
   auto mean = [&](Series k) {
     double m = 0;
@@ -100,7 +115,11 @@ ModelCheckVerdict ModelCheck::Verdict() const {
                                 : 0.0;
   };
   v.nis_mean = mean(kNis);
-  if (count_ < options_.min_samples) return v;
+  if (count_ < options_.min_samples) {
+    v.evidence =
+        "collecting: " + std::to_string(count_) + " of " + std::to_string(kWindow) + " innovations";
+    return v;
+  }
   // Heading bias while moving.
   double hm = 0, hs = 0;
   int moving = 0;
@@ -135,26 +154,32 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     }
   }
   const bool nis_ok = v.nis_mean < 3.0 * v.nis_expected;
-  v.consistent = best == nullptr && nis_ok;
+  v.consistent = best == nullptr && nis_ok && count_ == kWindow;
   std::ostringstream ev;
   ev.precision(3);
   if (best != nullptr) {
     v.suspected_effect = best->effect;
     v.confidence = 1.0 - std::exp(-(std::abs(best_z) - options_.z_threshold));
     ev << kOnlineTerms[best->term].what << " (z = " << best_z << ")";
-    std::string also;
     for (const auto& c : suspects_) {
-      if (c.term == best->term && c.effect != best->effect)
-        also += (also.empty() ? "" : ", ") + c.effect;
+      if (c.term == best->term) v.candidates.push_back(c.effect);
     }
-    if (!also.empty()) ev << ", the signature of " << also << " too";
+    if (v.candidates.size() > 1) {
+      ev << ": the signature of";
+      for (const auto& name : v.candidates) ev << " " << name;
+      ev << " (not told apart by this term)";
+    }
   } else if (!nis_ok) {
     v.suspected_effect = "unknown";
     v.confidence = 0.5;
     ev << "innovations too large (mean NIS " << v.nis_mean << ", expected " << v.nis_expected
        << ") without a known signature";
   }
-  ev << "; window " << n << " updates";
+  if (best == nullptr && nis_ok && count_ < kWindow) {
+    ev << "no signature so far; collecting: " << n << " of " << kWindow << " innovations";
+  } else {
+    ev << "; window " << n << " innovations";
+  }
   v.evidence = ev.str();
   return v;
 }

@@ -251,6 +251,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("gate_nis", &c.filter.gate_nis);
     s.Get("divergence_gated", &c.filter.divergence_gated);
     s.Get("batch_window_s", &c.filter.batch_window_s);
+    s.Get("adaptive_noise", &c.filter.adaptive_noise);
     s.CheckUnknown();
   }
   {

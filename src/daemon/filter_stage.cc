@@ -24,10 +24,26 @@ constexpr double kRefitCovarianceInflation = 4.0;
 constexpr size_t kRefitMinPoses = 10;
 // A parameter has converged when its sigma is below this fraction of its prior sigma.
 constexpr double kConvergedSigmaFraction = 0.05;
-// The model check calls the filter diverged when, over at least this many innovations,
-// the mean NIS exceeds its expectation this many times.
-constexpr int kDivergedMinWindow = 100;
-constexpr double kDivergedNisRatio = 10.0;
+// A re-fit replaces the running estimate only if every parameter's re-fit sigma is within
+// this factor of the running one (its window excites the parameters) ...
+constexpr double kRefitMaxSigmaRatio = 3.0;
+// ... and its cost on the window is below this fraction of the running estimate's: the
+// running parameters are wrong, not just the model (which would leave both fits poor).
+constexpr double kRefitMaxCostFraction = 0.25;
+// Without an accepted re-fit, the running estimate restarts with its covariance times this.
+constexpr double kRestartCovarianceInflation = 4.0;
+// After a restart, this many accepted updates in a row end the divergence episode.
+constexpr int kEpisodeEndUpdates = 100;
+// Adaptive noise above this level (measurement variances per frame interval) means the
+// model misses something; "converged" needs it below kAdequateNoiseLevel.
+constexpr double kInadequateNoiseLevel = 0.3;
+constexpr double kAdequateNoiseLevel = 0.05;
+
+PoseNoiseAdaptationOptions AdaptationOptions(const FilterOptions& f) {
+  PoseNoiseAdaptationOptions o;
+  o.enabled = f.adaptive_noise;
+  return o;
+}
 
 }  // namespace
 
@@ -94,7 +110,8 @@ FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPr
       checkpoint_every_ns_(SecondsToNs(opt_.checkpoint_every_s)),
       batch_window_ns_(SecondsToNs(opt_.filter.batch_window_s)),
       time_base_(max_gap_ns_),
-      recent_(kRecentPoses) {
+      recent_(kRecentPoses),
+      adapter_(AdaptationOptions(opt_.filter)) {
   std::string invalid;
   KINCAL_CHECK(opt_.IsValid(&invalid), invalid.c_str());  // the daemon's config was validated
   const FilterOptions& f = opt_.filter;
@@ -153,6 +170,10 @@ void FilterStage::StartNewBase(const char* what, TimeNs t, TimeBase::Stream by) 
   cal_.reset();
   check_.reset();
   recent_.clear();
+  adapter_.Reset();
+  high_noise_since_ = TimeBase::kNever;
+  consecutive_gated_ = 0;
+  last_update_ns_ = TimeBase::kNever;
   time_base_.StartNew(t, by);
   counters_.time_resets.fetch_add(1);
   spdlog::warn("{} jumped back by more than filter.max_pose_gap_s: new time base, parameters kept",
@@ -214,22 +235,47 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
 }
 
 void FilterStage::Update(const PoseSample& p, TimeNs t) {
+  const double dt_s = NsToSeconds(t - cal_->time_ns());
+  const Eigen::Vector3d extra = adapter_.ExtraPsd();
+  cal_->set_extra_pose_psd(extra);
   const UpdateResult r = cal_->AddPose(t, p.xytheta, p.covariance, opt_.filter.gate_nis);
+  if (!r.ok && !r.gated) return;  // not positive definite: nothing learnt
+  adapter_.Add(r.innovation.head<3>(), r.innovation_cov.topLeftCorner<3, 3>(), p.covariance,
+               extra * dt_s, dt_s);
+  check_->Add(t, r, cal_->state(), cal_->controls());  // gated innovations are evidence too
   if (r.gated) {
     counters_.poses_gated.fetch_add(1);
-    if (++consecutive_gated_ >= opt_.filter.divergence_gated) Recover(p, t);
-  } else if (r.ok) {
-    consecutive_gated_ = 0;
-    counters_.updates.fetch_add(1);
-    check_->Add(t, r, cal_->state(), cal_->controls());
+    accepted_in_row_ = 0;
+    if (++consecutive_gated_ >= opt_.filter.divergence_gated && restart_armed_) {
+      Recover(p, t, /*diverged=*/true);
+    }
+    return;
+  }
+  consecutive_gated_ = 0;
+  last_update_ns_ = t;
+  counters_.updates.fetch_add(1);
+  ++accepted_in_row_;
+  TrackEpisode(p, t);
+}
+
+// The innovations have run far beyond the prediction (the adaptive noise is high) for a
+// whole re-fit window: either the parameters are wrong (an overconfident prior, a changed
+// robot) or the model misses an effect. A re-fit tells them apart (RefitIsBetter); it is
+// tried once per episode, which ends when the noise is back to normal.
+void FilterStage::TrackEpisode(const PoseSample& p, TimeNs t) {
+  if (adapter_.level() > kInadequateNoiseLevel) {
+    if (high_noise_since_ == TimeBase::kNever) high_noise_since_ = t;
+  } else if (adapter_.level() < kAdequateNoiseLevel) {
+    high_noise_since_ = TimeBase::kNever;
+    if (accepted_in_row_ >= kEpisodeEndUpdates) restart_armed_ = true;
+  }
+  if (restart_armed_ && high_noise_since_ != TimeBase::kNever &&
+      t - high_noise_since_ >= batch_window_ns_) {
+    Recover(p, t, /*diverged=*/false);
   }
 }
 
-// Divergence: the filter has rejected divergence_gated poses in a row. Re-fit the parameters
-// by batch (robust loss) over the recent poses and controls, and start the filter again from
-// that estimate (or from the prior if the fit fails).
-void FilterStage::Recover(const PoseSample& p, TimeNs t) {
-  const int np = sys_.num_params();
+std::vector<PoseMeasurement> FilterStage::RecentMeasurements(TimeNs t) const {
   std::vector<PoseMeasurement> meas;
   int segment = 0;
   TimeNs prev = TimeBase::kNever;
@@ -241,47 +287,111 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t) {
     prev = rt;
     meas.push_back({rt, r.xytheta, r.covariance, segment});
   }
-  VecN<kMaxState> start = prior_.mean;
-  StateMat start_cov = prior_.covariance;
-  std::string how = "the configured prior";
+  return meas;
+}
+
+// A re-fit replaces the running estimate only when its window informs every parameter about
+// as well as the filter does, and it explains the window's poses clearly better than the
+// running estimate (whose cost there is the fit's initial cost: it starts from it).
+bool FilterStage::RefitIsBetter(const BatchResult& refit, const std::vector<PoseMeasurement>& meas,
+                                std::string* why) const {
+  const int np = sys_.num_params();
+  if (!refit.status.ok() || !refit.params.allFinite() || refit.covariance.rows() != np ||
+      !refit.covariance.allFinite()) {
+    *why = refit.status.ok() ? "no usable covariance" : refit.status.message();
+    return false;
+  }
+  const StateMat running = cal_->params_covariance();
+  for (int i = 0; i < np; ++i) {
+    const double ratio = std::sqrt(refit.covariance(i, i) / running(i, i));
+    if (!(ratio <= kRefitMaxSigmaRatio)) {
+      *why = "its " + std::to_string(meas.size()) + " poses do not excite " +
+             sys_.params()[static_cast<size_t>(i)].name;
+      return false;
+    }
+  }
+  if (!(refit.final_cost < kRefitMaxCostFraction * refit.initial_cost)) {
+    *why = "it explains the last poses little better than the running estimate (cost " +
+           std::to_string(refit.final_cost) + " against " + std::to_string(refit.initial_cost) +
+           ")";
+    return false;
+  }
+  return true;
+}
+
+// Divergence: the filter has rejected divergence_gated poses in a row although its process
+// noise adapts. Re-fit the parameters by batch (robust loss) over the recent poses and
+// controls, starting from the running estimate; restart the filter from the re-fit if it
+// is better (RefitIsBetter), else from the running estimate with a wider covariance. Never
+// from the configured prior: the data so far are worth more.
+void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
+  const int np = sys_.num_params();
+  const std::vector<PoseMeasurement> meas = RecentMeasurements(t);
+  VecN<kMaxState> start = cal_->params();
+  StateMat start_cov = kRestartCovarianceInflation * cal_->params_covariance();
+  std::string how = "the running estimate (no re-fit: too few poses)";
   if (meas.size() >= kRefitMinPoses) {
     BatchOptions bo;
     bo.huber_scale = kRefitHuberSigmas;
     bo.max_iterations = kRefitMaxIterations;
     bo.warmup_s = 0.0;
-    const BatchResult br = FitBatch(sys_, cal_->controls(), meas, prior_.mean.head(np), bo);
-    if (!br.status.ok()) {
-      spdlog::warn("batch re-fit failed: {}", br.status.message());
-    } else if (br.params.allFinite() && br.covariance.rows() == np && br.covariance.allFinite()) {
-      start = cal_->params();
+    const BatchResult br = FitBatch(sys_, cal_->controls(), meas, start.head(np), bo);
+    std::string why;
+    if (RefitIsBetter(br, meas, &why)) {
       start.head(np) = br.params;
       start_cov = kRefitCovarianceInflation * br.covariance;
       how = "a batch fit over " + std::to_string(meas.size()) + " poses";
+    } else if (!diverged) {
+      restart_armed_ = false;  // model error: the filter goes on, and says so
+      spdlog::info(
+          "innovations beyond the model for {:.1f} s; a re-fit does not explain them ({}): "
+          "the model misses an effect",
+          NsToSeconds(t - high_noise_since_), why);
+      return;
+    } else {
+      how = "the running estimate (re-fit not used: " + why + ")";
     }
+  } else if (!diverged) {
+    restart_armed_ = false;
+    return;
   }
   auto fresh =
       std::make_unique<OnlineCalibrator>(sys_, calibrator_options_, cal_->controls().origin_ns());
   fresh->controls() = cal_->controls();
   fresh->Initialize(t, p.xytheta, p.covariance, start, start_cov);
   cal_ = std::move(fresh);
-  check_->Reset();
+  adapter_.Reset();
   consecutive_gated_ = 0;
+  restart_armed_ = false;  // until kEpisodeEndUpdates updates in a row end the episode
   counters_.filter_resets.fetch_add(1);
-  spdlog::warn("filter diverged ({} poses in a row failed the innovation gate): restarted from {}",
-               opt_.filter.divergence_gated, how);
+  high_noise_since_ = TimeBase::kNever;
+  if (diverged) {
+    spdlog::warn(
+        "filter diverged ({} poses in a row failed the innovation gate): restarted from {}",
+        opt_.filter.divergence_gated, how);
+  } else {
+    spdlog::warn("the running parameters did not explain the last poses: restarted from {}", how);
+  }
 }
 
 // ---- outputs ----------------------------------------------------------------------------
 
-int FilterStage::ParamsStatus(bool converged) const {
+bool FilterStage::ModelInadequate(const ModelCheckVerdict& v) const {
+  return !v.suspected_effect.empty() || adapter_.level() > kInadequateNoiseLevel;
+}
+
+// The status the parameters are published with; health reports the same.
+int FilterStage::ParamsStatus(bool sigmas_small, TimeNs t) const {
+  if (consecutive_gated_ >= opt_.filter.divergence_gated) return kincal::params_t::STATUS_DIVERGED;
   const ModelCheckVerdict verdict = check_->Verdict();
-  const bool nis_far_off = verdict.window >= kDivergedMinWindow &&
-                           verdict.nis_mean > kDivergedNisRatio * verdict.nis_expected;
-  if (consecutive_gated_ > 0 && consecutive_gated_ < opt_.filter.divergence_gated) {
-    return kincal::params_t::STATUS_CONVERGING;
+  if (ModelInadequate(verdict)) return kincal::params_t::STATUS_MODEL_INADEQUATE;
+  const bool updated_recently =
+      last_update_ns_ != TimeBase::kNever && t - last_update_ns_ <= max_gap_ns_;
+  if (sigmas_small && updated_recently && consecutive_gated_ == 0 && verdict.consistent &&
+      adapter_.level() < kAdequateNoiseLevel) {
+    return kincal::params_t::STATUS_CONVERGED;
   }
-  if (nis_far_off || consecutive_gated_ > 0) return kincal::params_t::STATUS_DIVERGED;
-  return converged ? kincal::params_t::STATUS_CONVERGED : kincal::params_t::STATUS_CONVERGING;
+  return kincal::params_t::STATUS_CONVERGING;
 }
 
 void FilterStage::PublishParams(TimeNs t, bool force) {
@@ -290,13 +400,14 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
   last_params_ns_ = t;
   kincal::params_t& m = params_msg_;
   FillParamsMessage(sys_, cal_->params(), cal_->params_covariance(), cal_->filter_name(),
-                    cal_->update_count(), PipelineNsToUtime(t), &m);
-  bool converged = true;
+                    counters_.updates.load(), PipelineNsToUtime(t), &m);
+  bool sigmas_small = true;
   for (size_t i = 0; i < m.sigmas.size(); ++i) {
-    converged =
-        converged && m.sigmas[i] < kConvergedSigmaFraction * prior_sigma_[static_cast<int>(i)];
+    sigmas_small =
+        sigmas_small && m.sigmas[i] < kConvergedSigmaFraction * prior_sigma_[static_cast<int>(i)];
   }
-  m.status = static_cast<int8_t>(ParamsStatus(converged));
+  m.status = static_cast<int8_t>(ParamsStatus(sigmas_small, t));
+  status_.store(m.status);
   out_.params(m.utime, m);
   FillCheckpoint(m, opt_.effects, &estimate_);
   out_.estimate(estimate_);
@@ -305,8 +416,10 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
 void FilterStage::PublishModelCheck(TimeNs t) {
   last_check_ns_ = t;
   const int64_t utime = PipelineNsToUtime(t);
-  out_.model_check(utime,
-                   ModelCheckMessage(check_->Verdict(), std::string(sys_.model().name()), utime));
+  kincal::model_check_t m =
+      ModelCheckMessage(check_->Verdict(), std::string(sys_.model().name()), utime);
+  m.adaptive_noise = adapter_.level();
+  out_.model_check(utime, m);
 }
 
 void FilterStage::Finish() {

@@ -6,10 +6,13 @@
 //
 //   AddControl  a control sample (time base rules, held jumps, late and reordered ones)
 //   AddPose     a pose: initialise, new run, update or gate, recovery, publish
-//   Recover     after filter.divergence_gated gated poses in a row: batch re-fit, restart
+//   Recover     after filter.divergence_gated gated poses in a row (real divergence, at most
+//               once per episode): batch re-fit if its window informs every parameter and
+//               explains the recent poses better, else the running estimate; restart
 //   Finish      the final estimate and checkpoint
 #pragma once
 
+#include <atomic>
 #include <functional>
 #include <kincal/params_t.hpp>
 #include <memory>
@@ -23,6 +26,8 @@
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
 #include "kincal/daemon/samples.h"
+#include "kincal/estimation/batch.h"
+#include "kincal/estimation/noise_adaptation.h"
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/system.h"
 
@@ -90,6 +95,8 @@ class FilterStage {
     return time_base_.newest_control_ns() >= UtimeToPipelineNs(p.utime) || time_base_.holding();
   }
   bool holding_jump() const { return time_base_.holding(); }
+  // The status of the last parameters published (params_t::STATUS_*), for health.
+  int status() const { return status_.load(); }
   TimeNs held_since_mono_ns() const { return time_base_.held_since_mono_ns(); }
 
  private:
@@ -97,10 +104,15 @@ class FilterStage {
   void TakeJump(const char* what, TimeNs t, TimeBase::Stream by, TimeNs now_mono_ns);
   void StartNewBase(const char* what, TimeNs t, TimeBase::Stream by);
   void Update(const PoseSample& p, TimeNs t);
-  void Recover(const PoseSample& p, TimeNs t);
+  void TrackEpisode(const PoseSample& p, TimeNs t);
+  void Recover(const PoseSample& p, TimeNs t, bool diverged);
+  std::vector<PoseMeasurement> RecentMeasurements(TimeNs t) const;
+  bool RefitIsBetter(const BatchResult& refit, const std::vector<PoseMeasurement>& meas,
+                     std::string* why) const;
   void PublishParams(TimeNs t, bool force);
   void PublishModelCheck(TimeNs t);
-  int ParamsStatus(bool converged) const;
+  int ParamsStatus(bool sigmas_small, TimeNs t) const;
+  bool ModelInadequate(const ModelCheckVerdict& v) const;
 
   const System& sys_;
   const FilterStageOptions opt_;
@@ -116,10 +128,16 @@ class FilterStage {
   std::unique_ptr<OnlineCalibrator> cal_;
   std::unique_ptr<ModelCheck> check_;
   PoseRing recent_;  // poses the filter used, for a batch re-fit when it diverges
+  PoseNoiseAdapter adapter_;
   int consecutive_gated_ = 0;
+  bool restart_armed_ = true;  // one restart per divergence episode
+  int accepted_in_row_ = 0;    // updates since the last gated pose (re-arms the restart)
+  TimeNs last_update_ns_ = TimeBase::kNever;
+  TimeNs high_noise_since_ = TimeBase::kNever;  // adaptive noise above kInadequateNoiseLevel
   TimeNs last_params_ns_ = TimeBase::kNever, last_check_ns_ = TimeBase::kNever;
   TimeNs last_checkpoint_ns_ = 0;
   kincal::params_t params_msg_{};
+  std::atomic<int> status_{0};  // params_t::STATUS_INITIALIZING
   Checkpoint estimate_;
 };
 

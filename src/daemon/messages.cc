@@ -87,16 +87,20 @@ void FillParamsMessage(const System& sys, const StateVec& state, const StateMat&
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
                                         int64_t utime) {
   kincal::model_check_t m{};
-  m.schema_version = 1;
+  m.schema_version = 2;
   m.utime = utime;
   m.model = model;
   m.consistent = v.consistent ? 1 : 0;
   m.nis_mean = v.nis_mean;
   m.nis_expected = v.nis_expected;
   m.window = v.window;
+  m.window_capacity = v.window_capacity;
   m.suspected_effect = v.suspected_effect;
+  m.num_candidates = static_cast<int32_t>(v.candidates.size());
+  m.candidates = v.candidates;
   m.confidence = v.confidence;
   m.evidence = v.evidence;
+  m.num_added = 0;
   return m;
 }
 

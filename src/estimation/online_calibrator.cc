@@ -91,6 +91,11 @@ OnlineCalibrator::OnlineCalibrator(const System& sys, OnlineCalibratorOptions op
   std::string error;
   if (!options_.IsValid(sys_, &error)) throw std::invalid_argument("OnlineCalibrator: " + error);
   filter_ = MakeFilter(options_.filter);
+  noise_ = options_.noise;
+}
+
+void OnlineCalibrator::set_extra_pose_psd(const Eigen::Vector3d& psd) {
+  noise_.pose_psd = options_.noise.pose_psd + psd;
 }
 
 void OnlineCalibrator::Initialize(TimeNs t_ns, const StateVec& x0, const StateMat& P0) {
@@ -123,7 +128,7 @@ void OnlineCalibrator::PredictTo(TimeNs t_ns) {
   const double t0 = controls_.ToSeconds(t_ns_);
   const double t1 = controls_.ToSeconds(t_ns);
   SystemProcess f(sys_, controls_, t0, t1);
-  filter_->Predict(f, ProcessNoiseSqrt(sys_, options_.noise, t1 - t0));
+  filter_->Predict(f, ProcessNoiseSqrt(sys_, noise_, t1 - t0));
   t_ns_ = t_ns;
 }
 
@@ -152,6 +157,8 @@ UpdateResult OnlineCalibrator::AddPose(TimeNs t_ns, const Eigen::Vector3d& z,
       r.gated = true;
       r.nis = nis;
       r.innovation = nu;
+      r.innovation_cov = MeasMat::Zero(kPoseDim, kPoseDim);
+      r.innovation_cov.topLeftCorner<3, 3>() = S;
       return r;
     }
   }

@@ -55,5 +55,63 @@ TEST(FilterStage, PublishesAtTheConfiguredRates) {
   EXPECT_NEAR(static_cast<double>(run.checks.size()), 60 / 2.0, 1.0);
 }
 
+// ---- model error (issue 15): an effect the estimator was not told about ----------------
+
+StageScenario HiddenEffect(const std::string& effect, const std::string& param, double value) {
+  StageScenario sc = CleanDiffDrive();
+  sc.hidden = {effect};
+  sc.truth[param] = value;
+  sc.duration_s = 100;
+  return sc;
+}
+
+// The candidates of the first model-check message that names effects, and when (s after
+// the first message).
+std::pair<std::string, double> FirstNamed(const test_util::StageRun& run) {
+  for (const auto& m : run.checks) {
+    if (m.num_candidates > 0) {
+      std::string all;
+      for (const auto& c : m.candidates) all += c + " ";
+      return {all, (m.utime - run.checks.front().utime) * 1e-6};
+    }
+  }
+  return {"", -1};
+}
+
+void ExpectModelErrorHandledHonestly(const test_util::StageRun& run) {
+  EXPECT_LE(run.counters.filter_resets, 1);
+  EXPECT_LT(run.counters.poses_gated, run.counters.updates / 20) << "the gate threw away evidence";
+  ASSERT_FALSE(run.params.empty());
+  EXPECT_EQ(run.params.back().update_count, run.counters.updates);
+  // Never "converged" while the model check says the model does not fit.
+  for (size_t i = 0, c = 0; i < run.params.size(); ++i) {
+    while (c + 1 < run.checks.size() && run.checks[c + 1].utime <= run.params[i].utime) ++c;
+    if (!run.checks.empty() && run.checks[c].utime <= run.params[i].utime &&
+        !run.checks[c].consistent && run.checks[c].window > 0) {
+      EXPECT_NE(int{run.params[i].status}, int{kincal::params_t::STATUS_CONVERGED})
+          << "at params message " << i << " while the check said: " << run.checks[c].evidence;
+    }
+  }
+  EXPECT_EQ(int{run.params.back().status}, int{kincal::params_t::STATUS_MODEL_INADEQUATE});
+}
+
+TEST(FilterStageModelError, HiddenLagIsNotDivergenceAndIsNamed) {
+  const auto run = RunStage(HiddenEffect("actuator_lag", "tau_s", 0.15), DefaultStageOptions());
+  ExpectModelErrorHandledHonestly(run);
+  const auto [named, at_s] = FirstNamed(run);
+  EXPECT_TRUE(named.find("actuator_lag") != std::string::npos) << named;
+  EXPECT_GE(at_s, 0);
+  EXPECT_LE(at_s, 30.0);
+}
+
+TEST(FilterStageModelError, HiddenDelayIsNotDivergenceAndIsNamed) {
+  const auto run = RunStage(HiddenEffect("time_offset", "delay_s", 0.10), DefaultStageOptions());
+  ExpectModelErrorHandledHonestly(run);
+  const auto [named, at_s] = FirstNamed(run);
+  EXPECT_TRUE(named.find("time_offset") != std::string::npos) << named;
+  EXPECT_GE(at_s, 0);
+  EXPECT_LE(at_s, 30.0);
+}
+
 }  // namespace
 }  // namespace kincal::daemon

@@ -33,12 +33,17 @@ struct ModelCheckOptions {
 };
 
 struct ModelCheckVerdict {
-  bool consistent = true;
+  // True only over a full window of innovations that are white, unbiased and of the
+  // expected size; false while the window fills (evidence says so) or when a signature or
+  // the NIS says the model misses something.
+  bool consistent = false;
   double nis_mean = 0.0;
   double nis_expected = 3.0;
   int window = 0;
-  std::string suspected_effect;  // empty when none
-  double confidence = 0.0;       // 0..1
+  int window_capacity = 0;
+  std::string suspected_effect;         // the first candidate; empty when none
+  std::vector<std::string> candidates;  // every effect whose signature has the term found
+  double confidence = 0.0;              // 0..1
   std::string evidence;
 };
 
@@ -46,9 +51,12 @@ class ModelCheck {
  public:
   static constexpr int kWindow = 512;
   ModelCheck(const System& sys, ModelCheckOptions options = {});
-  // One filter update at time t (recording time base): the innovation and its covariance,
-  // the current state estimate (for heading and parameters) and the control history.
+  // One pose at time t (recording time base), used or gated: the innovation and its
+  // covariance, the current state estimate (for heading and parameters) and the control
+  // history. The innovation is whitened by its predicted sigma and clipped at
+  // kClipSigmas, so a single wild pose cannot dominate the correlations.
   void Add(TimeNs t_ns, const UpdateResult& update, const StateVec& state, const ControlSignal& u);
+  static constexpr double kClipSigmas = 8.0;
   ModelCheckVerdict Verdict() const;
   void Reset() {
     count_ = 0;

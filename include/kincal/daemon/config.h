@@ -125,6 +125,9 @@ struct FilterOptions {
   double gate_nis = 16.27;          // innovation gate (chi^2, 3 dof, 99.9 %); 0: off
   int divergence_gated = 10;        // this many gated poses in a row: diverged, re-fit by batch
   double batch_window_s = 8.0;      // poses (and controls) the re-fit uses; <= control_history_s
+  // Add pose process noise while the innovations run larger than predicted (model error),
+  // and take it back when they are normal (kincal/estimation/noise_adaptation.h).
+  bool adaptive_noise = true;
   bool IsValid(std::string* error) const;
 };
 

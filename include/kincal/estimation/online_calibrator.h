@@ -99,6 +99,10 @@ class OnlineCalibrator {
   // predicted mean) exceeds gate_nis is not used: ok = false, gated = true, nis set.
   UpdateResult AddPose(TimeNs t_ns, const Eigen::Vector3d& z, const Eigen::Matrix3d& R,
                        double gate_nis = 0.0);
+  // Pose process noise added to the configured pose_psd from now on (m^2/s, m^2/s,
+  // rad^2/s): the adaptive noise that lets the filter follow a robot whose motion the model
+  // does not fully explain (kincal/estimation/noise_adaptation.h).
+  void set_extra_pose_psd(const Eigen::Vector3d& psd);
   // Predicts to t without a measurement.
   void PredictTo(TimeNs t_ns);
   // Starts a new run at time t: pose := z (cov R), parameters and their covariance kept.
@@ -121,6 +125,7 @@ class OnlineCalibrator {
   TimeNs t_ns_ = 0;
   bool initialized_ = false;
   int64_t updates_ = 0;
+  ProcessNoiseOptions noise_;  // options_.noise plus the extra pose noise
 };
 
 }  // namespace kincal
