@@ -138,6 +138,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   Section top(root, path, "");
   top.Choice("source", &c.source, kSourceNames);
   top.Get("health_rate_hz", &c.health_rate_hz);
+  top.Get("no_target_warn_s", &c.no_target_warn_s);
   {
     auto s = top.Sub("lcm");
     s.Get("url", &c.lcm.url);
@@ -407,7 +408,8 @@ bool CheckpointOptions::IsValid(std::string* error) const {
 }
 
 bool DaemonConfig::IsValid(std::string* error) const {
-  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) || !lcm.IsValid(error)) {
+  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
+      !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
     return false;
   }
   switch (source) {

@@ -62,8 +62,13 @@ struct Daemon::Impl {
   PoseStage pose_stage;
   DetectionStage detection;
 
+  // The status of the last params_t published; a health message reports it. The lock
+  // orders the two publications, so that a log never shows health and params disagreeing.
+  std::mutex filter_report_mu;
+  int filter_status = 0;
+
   std::mutex status_mu;  // guards what follows
-  std::string source_error;
+  std::string source_error, model_check_evidence;
   Checkpoint estimate;
 
   std::optional<Checkpoint> resume;
@@ -124,9 +129,15 @@ struct Daemon::Impl {
   FilterOutputs StageOutputs() {
     FilterOutputs o;
     o.params = [this](int64_t utime, const kincal::params_t& m) {
+      std::lock_guard lock(filter_report_mu);
+      filter_status = m.status;
       out.Publish(cfg.lcm.params_channel, utime, m);
     };
     o.model_check = [this](int64_t utime, const kincal::model_check_t& m) {
+      {
+        std::lock_guard lock(status_mu);
+        model_check_evidence = m.evidence;
+      }
       out.Publish(cfg.lcm.model_check_channel, utime, m);
     };
     o.estimate = [this](const Checkpoint& ck) {
@@ -202,12 +213,17 @@ struct Daemon::Impl {
     s.last_frame_error = det.last_frame_error;
     s.latency_p50_ms = det.window_p50_ms;
     s.latency_p99_ms = det.window_p99_ms;
+    s.seconds_without_target = det.seconds_without_target;
+    s.no_target_warn_s = cfg.no_target_warn_s;
     s.last_reject = intake.last_reject();
     {
       std::lock_guard lock(status_mu);
       s.source_error = source_error;
+      s.model_check_evidence = model_check_evidence;
     }
     kincal::health_t h;
+    std::lock_guard lock(filter_report_mu);
+    s.filter_status = filter_status;
     health.Build(Snapshot(), s, period_s, RealtimeUtime(), &h);
     out.Publish(cfg.lcm.health_channel, h.utime, h);
     if (!h.message.empty()) spdlog::warn("health: {}", h.message);

@@ -36,6 +36,11 @@ void DetectionStage::Run() {
       continue;
     }
     (p.valid ? counters_.poses_valid : counters_.poses_invalid).fetch_add(1);
+    {
+      std::lock_guard lock(mu_);
+      if (last_target_utime_ < 0 || p.valid) last_target_utime_ = p.utime;
+      last_frame_utime_ = p.utime;
+    }
     // Publish the pose (and markers) now: this is the frame-to-publish latency.
     FillPoseMessage(p, &pose_msg);
     publisher_.Publish(opt_.pose_channel, p.utime, pose_msg);
@@ -64,6 +69,8 @@ DetectionStage::Status DetectionStage::TakeStatus(bool reset_window) {
   s.total_p50_ms = latency_total_.Percentile(0.5);
   s.total_p99_ms = latency_total_.Percentile(0.99);
   s.total_max_ms = latency_total_.max_ms();
+  if (last_frame_utime_ >= 0)
+    s.seconds_without_target = 1e-6 * (last_frame_utime_ - last_target_utime_);
   if (reset_window) latency_window_.Reset();
   return s;
 }

@@ -34,6 +34,7 @@ class DetectionStage {
     std::string last_frame_error;
     double window_p50_ms = 0, window_p99_ms = 0;
     double total_p50_ms = 0, total_p99_ms = 0, total_max_ms = 0;
+    double seconds_without_target = 0;  // frame time since the last pose (or the first frame)
   };
   Status TakeStatus(bool reset_window);
 
@@ -47,6 +48,7 @@ class DetectionStage {
   std::mutex mu_;  // guards what follows
   std::string last_frame_error_;
   LatencyHistogram latency_total_, latency_window_;
+  int64_t last_target_utime_ = -1, last_frame_utime_ = -1;
 };
 
 }  // namespace kincal::daemon

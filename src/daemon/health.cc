@@ -2,6 +2,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <kincal/params_t.hpp>
+
 #include "daemon/messages.h"
 
 namespace kincal::daemon {
@@ -36,13 +38,15 @@ std::string SummaryLine(const DaemonCounters& c) {
 void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
                            int64_t utime, kincal::health_t* h) {
   *h = kincal::health_t{};
-  h->schema_version = 3;
+  h->schema_version = 4;
   h->utime = utime;
   h->source = s.source_name;
   h->frame_rate_hz = static_cast<double>(now.frames_captured - prev_.frames_captured) / period_s;
   FillHealthCounters(now, h);
   h->latency_p50_ms = s.latency_p50_ms;
   h->latency_p99_ms = s.latency_p99_ms;
+  h->filter_status = static_cast<int8_t>(s.filter_status);
+  h->seconds_without_target = s.seconds_without_target;
 
   Problems p;
   if (!s.source_error.empty()) p.Add("source: " + s.source_error);
@@ -63,6 +67,14 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
     p.Add("filter diverged and was restarted from a batch fit");
   }
   if (now.time_resets > prev_.time_resets) p.Add("a clock jumped back: new time base");
+  if (s.filter_status == kincal::params_t::STATUS_DIVERGED) {
+    p.Add("filter diverged: poses fail the innovation gate");
+  } else if (s.filter_status == kincal::params_t::STATUS_MODEL_INADEQUATE) {
+    p.Add("the model does not fit the motion: " + s.model_check_evidence);
+  }
+  if (now.frames_captured > 0 && s.seconds_without_target > s.no_target_warn_s) {
+    p.Add(fmt::format("no target seen for {:.1f} s", s.seconds_without_target));
+  }
   if (now.frames_out_of_order > prev_.frames_out_of_order) {
     p.Add("frames with repeated or earlier timestamps");
   }

@@ -22,6 +22,10 @@ struct HealthStatus {
   bool expects_lcm_controls = false;  // controls come over LCM (a live robot)
   std::string controls_channel;
   double latency_p50_ms = 0, latency_p99_ms = 0;  // since the last message
+  int filter_status = 0;                          // of the last params_t (STATUS_*)
+  std::string model_check_evidence;               // of the last model_check_t
+  double seconds_without_target = 0;              // frame time
+  double no_target_warn_s = 5.0;                  // report beyond this
 };
 
 // The whole run in one line (the daemon logs it when it stops).

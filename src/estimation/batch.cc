@@ -7,6 +7,7 @@
 #include <memory>
 #include <stdexcept>
 
+#include "estimation/ceres_logging.h"
 #include "kincal/angles.h"
 
 namespace kincal {
@@ -299,6 +300,7 @@ bool BatchOptions::IsValid(const System& sys, std::string* error) const {
 BatchResult FitBatch(const System& sys, const ControlSignal& controls,
                      std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params0,
                      const BatchOptions& options) {
+  RouteCeresLogging();
   std::string error;
   BatchResult invalid;
   if (!options.IsValid(sys, &error)) {
@@ -368,6 +370,7 @@ BatchResult BoundAt(const System& sys, const ControlSignal& controls,
                     std::span<const PoseMeasurement> meas, const Eigen::VectorXd& params_true,
                     const std::vector<Eigen::Vector3d>& segment_start_true,
                     const BatchOptions& options) {
+  RouteCeresLogging();
   std::string error;
   BatchResult invalid;
   if (!options.IsValid(sys, &error)) {

@@ -8,8 +8,7 @@ namespace kincal {
 
 bool PoseNoiseAdaptationOptions::IsValid(std::string* error) const {
   if (!(smoothing_updates >= 1) || !(outlier_cap > 1) || !(margin >= 0)) {
-    *error =
-        "pose noise adaptation: expected smoothing_updates >= 1, outlier_cap > 1, margin >= 0";
+    *error = "pose noise adaptation: expected smoothing_updates >= 1, outlier_cap > 1, margin >= 0";
     return false;
   }
   return true;

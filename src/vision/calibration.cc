@@ -11,6 +11,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "estimation/ceres_logging.h"
+
 namespace kincal::vision {
 namespace {
 
@@ -202,6 +204,7 @@ namespace {
 
 CalibrationResult Refine(const std::vector<CalibrationView>& views, const CalibrationOptions& o,
                          double* intr, std::vector<std::array<double, 6>>& poses) {
+  RouteCeresLogging();
   ceres::Problem problem;
   int points = 0;
   for (size_t i = 0; i < views.size(); ++i) {

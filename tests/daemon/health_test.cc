@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <kincal/params_t.hpp>
+
 namespace kincal::daemon {
 namespace {
 
@@ -16,7 +18,7 @@ TEST(Health, EveryCounterIsPublishedWhole) {
   HealthReporter r;
   kincal::health_t h;
   r.Build(c, HealthStatus{}, 1.0, 42, &h);
-  EXPECT_EQ(h.schema_version, 3);
+  EXPECT_EQ(h.schema_version, 4);
   EXPECT_EQ(h.utime, 42);
   v = 1;
 #define KINCAL_CHECK_FIELD(name, meaning) EXPECT_EQ(h.name, v++) << #name;
@@ -69,6 +71,32 @@ TEST(Health, StandingConditionsAreReportedEveryTime) {
   s.source_done = true;  // a replay that ended: silence is expected
   s.source_error.clear();
   c.controls_received = 5;
+  r.Build(c, s, 1.0, 3, &h);
+  EXPECT_EQ(h.ok, 1) << h.message;
+}
+
+TEST(Health, NoTargetAndAModelThatDoesNotFitAreNotOk) {
+  HealthReporter r;
+  HealthStatus s;
+  s.source_done = true;
+  DaemonCounters c;
+  c.frames_captured = 600;
+  kincal::health_t h;
+  s.seconds_without_target = 20.0;  // 600 frames, none with the target
+  r.Build(c, s, 1.0, 1, &h);
+  EXPECT_EQ(h.ok, 0);
+  EXPECT_NE(h.message.find("no target seen for 20.0 s"), std::string::npos) << h.message;
+  EXPECT_DOUBLE_EQ(h.seconds_without_target, 20.0);
+  s.seconds_without_target = 1.0;
+  s.filter_status = kincal::params_t::STATUS_MODEL_INADEQUATE;
+  s.model_check_evidence = "heading innovation vs recent turn-command change (z = -9)";
+  r.Build(c, s, 1.0, 2, &h);
+  EXPECT_EQ(h.ok, 0);
+  EXPECT_EQ(int{h.filter_status}, int{kincal::params_t::STATUS_MODEL_INADEQUATE});
+  EXPECT_NE(h.message.find("the model does not fit the motion: heading innovation"),
+            std::string::npos)
+      << h.message;
+  s.filter_status = kincal::params_t::STATUS_CONVERGED;
   r.Build(c, s, 1.0, 3, &h);
   EXPECT_EQ(h.ok, 1) << h.message;
 }

@@ -171,6 +171,7 @@ struct DaemonConfig {
   RecordOptions record;
   CheckpointOptions checkpoint;
   double health_rate_hz = 1.0;
+  double no_target_warn_s = 5.0;  // health is not ok after this long (frame time) without target
   // Every section, then what ties sections together; false with *error naming the
   // section.key and what is expected. Only the sections the source uses are checked.
   bool IsValid(std::string* error) const;
