@@ -7,6 +7,7 @@
 #include <csignal>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #include "kincal/daemon/daemon.h"
@@ -73,6 +74,10 @@ int main(int argc, char** argv) {
   app.add_flag("--resume-if-present", resume_if_present,
                "resume from the --checkpoint file when it exists (services)");
   app.add_option("--duration", duration, "simulation length in seconds (source: sim)");
+  std::string effects;
+  app.add_option("--effects", effects,
+                 "robot effects: 'auto' (found and added online), 'none', or specs separated by "
+                 "commas, e.g. time_offset,auto");
   app.add_flag("-q,--quiet", quiet, "log warnings and errors only");
   CLI11_PARSE(app, argc, argv);
   if (quiet) spdlog::set_level(spdlog::level::warn);
@@ -104,6 +109,18 @@ int main(int argc, char** argv) {
     if (cfg.source == kincal::daemon::SourceKind::kSim)
       cfg.sim.speed = fast ? 0.0 : (sp->count() ? speed : cfg.sim.speed);
     if (duration > 0) cfg.sim.duration_s = duration;
+    if (!effects.empty()) {
+      cfg.robot.effects.clear();
+      cfg.robot.auto_effects = false;
+      std::stringstream list(effects == "none" ? "" : effects);
+      for (std::string e; std::getline(list, e, ',');) {
+        if (e == "auto") {
+          cfg.robot.auto_effects = true;
+        } else if (!e.empty()) {
+          cfg.robot.effects.push_back(e);
+        }
+      }
+    }
     if (loops > 1) cfg.replay.loops = loops;
     if (!record.empty()) cfg.record.path = record;
     if (record_png) cfg.record.frame_encoding = kincal::daemon::FrameEncoding::kPng;

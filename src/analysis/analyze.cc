@@ -81,7 +81,19 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   };
   std::shared_ptr<const KinematicModel> model;
   if (const Status s = MakeModel(o.model, &model); !s.ok()) throw AnalysisError(s.message());
-  const System bare(model);
+  std::vector<std::shared_ptr<const Effect>> base_effects;
+  for (const auto& spec_text : o.base_effects) {
+    EffectSpec spec;
+    std::unique_ptr<Effect> e;
+    Status st = ParseEffectSpec(spec_text, &spec);
+    if (st.ok()) st = MakeEffect(spec, *model, &e);
+    if (!st.ok()) throw AnalysisError("base effects: " + st.message());
+    base_effects.push_back(std::move(e));
+  }
+  if (const Status st = System::CheckCombination(*model, base_effects, {}); !st.ok()) {
+    throw AnalysisError("base effects: " + st.message());
+  }
+  const System bare(model, base_effects);  // the model as it stands (bare unless base effects)
   const Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
   Dataset d = analysis::Prepare(rec, o, &res.warnings);
   res.pose_sigma = d.sigma;
@@ -99,7 +111,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   const double command_lag = analysis::EstimateCommandLag(d, bare, current.fit.p);
   current.eval = analysis::Evaluate(bare, current.fit.p, d);
   const int fit_windows = static_cast<int>(d.fit_windows.size());
-  res.before = analysis::MakeReport(bare, current.fit, current.eval, {}, fit_windows);
+  res.before = analysis::MakeReport(bare, current.fit, current.eval, o.base_effects, fit_windows);
   res.before.unique = base_report.unique;
   res.before.uniqueness = base_report.uniqueness;
   if (!res.before.unobservable.empty()) {
@@ -111,9 +123,10 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.tests_before = analysis::TestResiduals(current.eval, o.horizon_s);
   res.residual_steps.push_back({"before", current.eval.points});
   current.diagnosis = res.diagnosis_before;
+  current.effects = base_effects;
 
   // 2. Selection: each round tries every candidate on top of what was accepted.
-  std::vector<std::string> accepted;
+  std::vector<std::string> accepted = o.base_effects;
   const auto candidates = analysis::Candidates(*model, o);
   for (int round = 1; round <= o.max_effects && !candidates.empty(); ++round) {
     std::vector<Tried> tried;

@@ -18,13 +18,39 @@ constexpr double kMinShortWindowS = 0.2;
 constexpr int kMaxShortWindows = 150;
 // The fewest poses a recording must have.
 constexpr size_t kMinPoses = 20;
+// No window spans a gap between consecutive poses longer than this many typical pose
+// intervals and this fraction of the horizon: the robot may have been carried (kidnapped)
+// or lost there, and nothing predicts across it.
+constexpr double kInnerGapIntervals = 3.0;
+constexpr double kInnerGapHorizonFraction = 0.25;
 
-int FindEnd(const std::vector<double>& t, int i, double h) {
+// For each pose, the index of the first pose after which a gap follows (n - 1 if none).
+std::vector<int> NextGap(const std::vector<double>& t, double h) {
+  const size_t n = t.size();
+  std::vector<double> dt;
+  for (size_t i = 1; i < n; ++i) dt.push_back(t[i] - t[i - 1]);
+  double median = 0.0;
+  if (!dt.empty()) {
+    auto mid = dt.begin() + static_cast<long>(dt.size() / 2);
+    std::nth_element(dt.begin(), mid, dt.end());
+    median = *mid;
+  }
+  const double limit = std::max(kInnerGapIntervals * median, kInnerGapHorizonFraction * h);
+  std::vector<int> next(n, static_cast<int>(n) - 1);
+  for (size_t k = n - 1; k-- > 0;) {
+    next[k] = t[k + 1] - t[k] > limit ? static_cast<int>(k) : next[k + 1];
+  }
+  return next;
+}
+
+int FindEnd(const Dataset& d, int i, double h) {
+  const auto& t = d.t;
   const double target = t[static_cast<size_t>(i)] + h;
   const auto it = std::lower_bound(t.begin() + i, t.end(), target - 1e-9);
   if (it == t.end()) return -1;
   const int j = static_cast<int>(it - t.begin());
   if (t[static_cast<size_t>(j)] - target > kMaxEndOvershoot * h + 1e-3) return -1;  // a gap
+  if (d.next_gap[static_cast<size_t>(i)] < j) return -1;                            // a gap inside
   return j;
 }
 
@@ -33,7 +59,7 @@ std::vector<Window> NonOverlapping(const Dataset& d, double h, double t0, double
   const auto& t = d.t;
   int i = static_cast<int>(std::lower_bound(t.begin(), t.end(), t0) - t.begin());
   while (i < static_cast<int>(t.size()) && t[static_cast<size_t>(i)] + h <= t1) {
-    const int j = FindEnd(t, i, h);
+    const int j = FindEnd(d, i, h);
     if (j < 0) {
       ++i;
       continue;
@@ -122,6 +148,7 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     warnings->push_back(m.str());
   }
   d.t_split = t0 + o.fit_fraction * (t1 - t0);
+  d.next_gap = NextGap(d.t, o.horizon_s);
   d.sigma = o.pose_sigma ? *o.pose_sigma : EstimatePoseSigma(rec);
   d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1])
             .asDiagonal();
@@ -130,7 +157,7 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   const int n = static_cast<int>(d.t.size());
   const int stride = std::max(1, (n - first) / o.max_eval_windows);
   for (int i = first; i < n; i += stride) {
-    const int j = FindEnd(d.t, i, o.horizon_s);
+    const int j = FindEnd(d, i, o.horizon_s);
     if (j < 0 || d.t[static_cast<size_t>(j)] > t1) continue;
     const bool fit = d.t[static_cast<size_t>(j)] <= d.t_split;
     const bool held = d.t[static_cast<size_t>(i)] >= d.t_split;

@@ -21,7 +21,8 @@ struct Window {
 
 struct Dataset {
   const Recording* rec = nullptr;
-  std::vector<double> t;  // pose times, s since origin
+  std::vector<double> t;      // pose times, s since origin
+  std::vector<int> next_gap;  // per pose: the first pose after which a gap follows
   double t_ctrl0 = 0, t_ctrl1 = 0, t_split = 0;
   double horizon = 1.0;
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();

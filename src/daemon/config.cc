@@ -3,6 +3,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <array>
 #include <filesystem>
 #include <set>
@@ -92,6 +93,23 @@ class Section {
     Get(key, out);
     if (!out->empty() && std::filesystem::path(*out).is_relative() && node_ && node_[key]) {
       *out = (std::filesystem::path(base_dir) / *out).lexically_normal().string();
+    }
+  }
+  // A list of effect specs, or "auto", or a list with "auto" among the specs: the declared
+  // effects, and whether the daemon may add more online.
+  void Effects(const std::string& key, std::vector<std::string>* list, bool* automatic) {
+    known_.insert(key);
+    if (!node_ || !node_[key] || node_[key].IsNull()) return;
+    const YAML::Node n = node_[key];
+    if (n.IsScalar() && n.as<std::string>() == "auto") {
+      *automatic = true;
+      return;
+    }
+    Get(key, list);
+    const auto a = std::find(list->begin(), list->end(), "auto");
+    if (a != list->end()) {
+      *automatic = true;
+      list->erase(a);
     }
   }
   Section Sub(const std::string& key) {
@@ -228,7 +246,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   {
     auto s = top.Sub("robot");
     s.Get("model", &c.robot.model);
-    s.Get("effects", &c.robot.effects);
+    s.Effects("effects", &c.robot.effects, &c.robot.auto_effects);
     s.Get("guess", &c.robot.guess);
     s.Get("guess_sigma_fraction", &c.robot.guess_sigma_fraction);
     s.Choice("control_stamp", &c.robot.control_stamp, kControlStampNames);

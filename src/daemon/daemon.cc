@@ -155,8 +155,10 @@ struct Daemon::Impl {
       spdlog::info("resumed {} of {} parameters from {} ({} updates)", matched, sys.num_params(),
                    cfg.checkpoint.resume, resume->update_count);
     }
+    FilterStageOptions options = FilterStageOptionsFrom(cfg);
+    options.lossless = caps.lossless;
     FilterStage stage(
-        sys, FilterStageOptionsFrom(cfg), std::move(prior),
+        sys, std::move(options), std::move(prior),
         [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters);
     MergeInputs in;
     in.poses = &pose_q;

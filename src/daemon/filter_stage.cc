@@ -30,6 +30,8 @@ constexpr double kRefitMaxSigmaRatio = 3.0;
 // ... and its cost on the window is below this fraction of the running estimate's: the
 // running parameters are wrong, not just the model (which would leave both fits poor).
 constexpr double kRefitMaxCostFraction = 0.25;
+// An effect added online starts from the search's fit with its sigmas times this.
+constexpr double kAugmentSigmaInflation = 2.0;
 // Without an accepted re-fit, the running estimate restarts with its covariance times this.
 constexpr double kRestartCovarianceInflation = 4.0;
 // After a restart, this many accepted updates in a row end the divergence episode.
@@ -81,6 +83,7 @@ FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
   o.model_check_every_s = 1.0 / c.health_rate_hz;
   o.checkpoint_path = c.checkpoint.path;
   o.checkpoint_every_s = c.checkpoint.every_s;
+  o.auto_effects = c.robot.auto_effects;
   return o;
 }
 
@@ -96,7 +99,8 @@ bool FilterStageOptions::IsValid(std::string* error) const {
 FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPrior prior,
                          std::function<bool(ControlSample*)> next_control, FilterOutputs outputs,
                          CounterSet* counters)
-    : sys_(sys),
+    : sys_(std::make_shared<System>(sys)),
+      effects_(options.effects),
       opt_(std::move(options)),
       prior_(std::move(prior)),
       prior_sigma_(prior_.covariance.diagonal().cwiseSqrt()),
@@ -111,7 +115,8 @@ FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPr
       batch_window_ns_(SecondsToNs(opt_.filter.batch_window_s)),
       time_base_(max_gap_ns_),
       recent_(kRecentPoses),
-      adapter_(AdaptationOptions(opt_.filter)) {
+      adapter_(AdaptationOptions(opt_.filter)),
+      online_(OnlineEffectsOptions{.enabled = opt_.auto_effects, .lossless = opt_.lossless}) {
   std::string invalid;
   KINCAL_CHECK(opt_.IsValid(&invalid), invalid.c_str());  // the daemon's config was validated
   const FilterOptions& f = opt_.filter;
@@ -145,15 +150,16 @@ void FilterStage::DrainControls(TimeNs now_mono_ns) {
 void FilterStage::AddControlSample(const ControlSample& c) {
   const TimeNs t = UtimeToPipelineNs(c.utime);
   if (!cal_) {
-    cal_ = std::make_unique<OnlineCalibrator>(sys_, calibrator_options_, t);
-    check_ = std::make_unique<ModelCheck>(sys_);
+    cal_ = std::make_unique<OnlineCalibrator>(*sys_, calibrator_options_, t);
+    check_ = std::make_unique<ModelCheck>(*sys_);
   }
   if (cal_->initialized() && t < cal_->time_ns()) counters_.controls_late.fetch_add(1);
-  const std::span<const double> values(c.values.data(), static_cast<size_t>(sys_.num_controls()));
+  const std::span<const double> values(c.values.data(), static_cast<size_t>(sys_->num_controls()));
   if (!cal_->AddControl(t, values)) {
     counters_.controls_out_of_order.fetch_add(1);
     return;
   }
+  online_.AddControl(t, values, sys_->num_controls());
   time_base_.ControlUsed(t);
 }
 
@@ -162,7 +168,7 @@ void FilterStage::AddControlSample(const ControlSample& c) {
 // A clock jumped back: start a new time base. Parameters and their covariance carry over as
 // the prior; the control history and the pose are dropped.
 void FilterStage::StartNewBase(const char* what, TimeNs t, TimeBase::Stream by) {
-  const int np = sys_.num_params();
+  const int np = sys_->num_params();
   if (cal_ && cal_->initialized()) {
     prior_.mean.head(np) = cal_->params().head(np);
     prior_.covariance = cal_->params_covariance();
@@ -174,6 +180,7 @@ void FilterStage::StartNewBase(const char* what, TimeNs t, TimeBase::Stream by) 
   high_noise_since_ = TimeBase::kNever;
   consecutive_gated_ = 0;
   last_update_ns_ = TimeBase::kNever;
+  online_.Reset();
   time_base_.StartNew(t, by);
   counters_.time_resets.fetch_add(1);
   spdlog::warn("{} jumped back by more than filter.max_pose_gap_s: new time base, parameters kept",
@@ -221,6 +228,7 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
     consecutive_gated_ = 0;
   } else {
     Update(p, t);
+    if (auto found = online_.OnPose(t)) Augment(*found, p, t);
   }
   time_base_.PoseSeen(t);
   if (recent_.full()) recent_.pop();
@@ -295,7 +303,7 @@ std::vector<PoseMeasurement> FilterStage::RecentMeasurements(TimeNs t) const {
 // running estimate (whose cost there is the fit's initial cost: it starts from it).
 bool FilterStage::RefitIsBetter(const BatchResult& refit, const std::vector<PoseMeasurement>& meas,
                                 std::string* why) const {
-  const int np = sys_.num_params();
+  const int np = sys_->num_params();
   if (!refit.status.ok() || !refit.params.allFinite() || refit.covariance.rows() != np ||
       !refit.covariance.allFinite()) {
     *why = refit.status.ok() ? "no usable covariance" : refit.status.message();
@@ -306,7 +314,7 @@ bool FilterStage::RefitIsBetter(const BatchResult& refit, const std::vector<Pose
     const double ratio = std::sqrt(refit.covariance(i, i) / running(i, i));
     if (!(ratio <= kRefitMaxSigmaRatio)) {
       *why = "its " + std::to_string(meas.size()) + " poses do not excite " +
-             sys_.params()[static_cast<size_t>(i)].name;
+             sys_->params()[static_cast<size_t>(i)].name;
       return false;
     }
   }
@@ -325,7 +333,7 @@ bool FilterStage::RefitIsBetter(const BatchResult& refit, const std::vector<Pose
 // is better (RefitIsBetter), else from the running estimate with a wider covariance. Never
 // from the configured prior: the data so far are worth more.
 void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
-  const int np = sys_.num_params();
+  const int np = sys_->num_params();
   const std::vector<PoseMeasurement> meas = RecentMeasurements(t);
   VecN<kMaxState> start = cal_->params();
   StateMat start_cov = kRestartCovarianceInflation * cal_->params_covariance();
@@ -335,7 +343,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
     bo.huber_scale = kRefitHuberSigmas;
     bo.max_iterations = kRefitMaxIterations;
     bo.warmup_s = 0.0;
-    const BatchResult br = FitBatch(sys_, cal_->controls(), meas, start.head(np), bo);
+    const BatchResult br = FitBatch(*sys_, cal_->controls(), meas, start.head(np), bo);
     std::string why;
     if (RefitIsBetter(br, meas, &why)) {
       start.head(np) = br.params;
@@ -356,7 +364,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
     return;
   }
   auto fresh =
-      std::make_unique<OnlineCalibrator>(sys_, calibrator_options_, cal_->controls().origin_ns());
+      std::make_unique<OnlineCalibrator>(*sys_, calibrator_options_, cal_->controls().origin_ns());
   fresh->controls() = cal_->controls();
   fresh->Initialize(t, p.xytheta, p.covariance, start, start_cov);
   cal_ = std::move(fresh);
@@ -399,7 +407,7 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
   if (!force && t - last_params_ns_ < params_every_ns_) return;
   last_params_ns_ = t;
   kincal::params_t& m = params_msg_;
-  FillParamsMessage(sys_, cal_->params(), cal_->params_covariance(), cal_->filter_name(),
+  FillParamsMessage(*sys_, cal_->params(), cal_->params_covariance(), cal_->filter_name(),
                     counters_.updates.load(), PipelineNsToUtime(t), &m);
   bool sigmas_small = true;
   for (size_t i = 0; i < m.sigmas.size(); ++i) {
@@ -409,17 +417,79 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
   m.status = static_cast<int8_t>(ParamsStatus(sigmas_small, t));
   status_.store(m.status);
   out_.params(m.utime, m);
-  FillCheckpoint(m, opt_.effects, &estimate_);
+  FillCheckpoint(m, effects_, &estimate_);
   out_.estimate(estimate_);
 }
 
 void FilterStage::PublishModelCheck(TimeNs t) {
   last_check_ns_ = t;
   const int64_t utime = PipelineNsToUtime(t);
-  kincal::model_check_t m =
-      ModelCheckMessage(check_->Verdict(), std::string(sys_.model().name()), utime);
+  const ModelCheckVerdict verdict = check_->Verdict();
+  std::string model(sys_->model().name());
+  for (const auto& e : effects_) model += "+" + e;
+  kincal::model_check_t m = ModelCheckMessage(verdict, model, utime);
   m.adaptive_noise = adapter_.level();
+  m.num_added = static_cast<int32_t>(added_.size());
+  for (const auto& a : added_) {
+    m.effects_added.push_back(a.name);
+    m.added_utime.push_back(a.utime);
+    m.heldout_before_m.push_back(a.heldout_before_m);
+    m.heldout_after_m.push_back(a.heldout_after_m);
+  }
   out_.model_check(utime, m);
+  if (cal_ && cal_->initialized()) {
+    online_.OnCheck(t, verdict, recent_, *sys_, cal_->params(), effects_);
+  }
+}
+
+// An effect found online: the filter starts again on the augmented model, from the search's
+// fit (its sigmas widened: the window was short), keeping the control history.
+void FilterStage::Augment(const EffectSearchResult& r, const PoseSample& p, TimeNs t) {
+  std::vector<std::string> effects = effects_;
+  effects.insert(effects.end(), r.added.begin(), r.added.end());
+  std::unique_ptr<System> made;
+  if (const Status s = MakeSystem(sys_->model().name(), effects, {}, &made); !s.ok()) {
+    spdlog::warn("effect search proposed {}: {}", r.added.front(), s.message());
+    return;
+  }
+  const std::shared_ptr<const System> sys = std::move(made);
+  const int np = sys->num_params();
+  VecN<kMaxState> mean = VecN<kMaxState>::Zero(np);
+  StateMat cov = StateMat::Zero(np, np);
+  Eigen::VectorXd prior_sigma(np);
+  for (int i = 0; i < np; ++i) {
+    const ParamInfo& info = sys->params()[static_cast<size_t>(i)];
+    mean[i] = info.default_value;
+    double sigma = info.default_sigma;
+    for (const auto& e : r.params) {
+      if (e.name == info.name) mean[i] = e.value, sigma = e.sigma;
+    }
+    cov(i, i) = std::pow(kAugmentSigmaInflation * sigma, 2);
+    const int old = sys_->ParamIndex(info.name);
+    prior_sigma[i] = old >= 0 ? prior_sigma_[old] : info.default_sigma;
+  }
+  auto cal =
+      std::make_unique<OnlineCalibrator>(*sys, calibrator_options_, cal_->controls().origin_ns());
+  cal->controls() = cal_->controls();
+  cal->Initialize(t, p.xytheta, p.covariance, mean, cov);
+  auto check = std::make_unique<ModelCheck>(*sys);
+  cal_ = std::move(cal);
+  check_ = std::move(check);
+  sys_ = sys;
+  effects_ = std::move(effects);
+  prior_sigma_ = prior_sigma;
+  adapter_.Reset();
+  consecutive_gated_ = 0;
+  restart_armed_ = true;
+  high_noise_since_ = TimeBase::kNever;
+  for (const auto& name : r.added) {
+    added_.push_back({name, PipelineNsToUtime(t), r.heldout_before_m, r.heldout_after_m});
+    counters_.effects_added.fetch_add(1);
+    spdlog::info(
+        "added {} online: held-out error {:.4f} m -> {:.4f} m; filter restarted on the "
+        "augmented model",
+        name, r.heldout_before_m, r.heldout_after_m);
+  }
 }
 
 void FilterStage::Finish() {

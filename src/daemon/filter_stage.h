@@ -19,6 +19,7 @@
 #include <string>
 
 #include "daemon/counters.h"
+#include "daemon/online_effects.h"
 #include "daemon/pose_ring.h"
 #include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
@@ -56,6 +57,8 @@ struct FilterStageOptions {
   double model_check_every_s = 1.0;  // a model_check_t this often (the health rate)
   std::string checkpoint_path;       // empty: no checkpoints
   double checkpoint_every_s = 10.0;
+  bool auto_effects = false;  // robot.effects: auto (online_effects.h)
+  bool lossless = false;      // a replay with --fast: online decisions at fixed data times
   bool IsValid(std::string* error) const;
 };
 FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c);
@@ -97,6 +100,8 @@ class FilterStage {
   bool holding_jump() const { return time_base_.holding(); }
   // The status of the last parameters published (params_t::STATUS_*), for health.
   int status() const { return status_.load(); }
+  // The model as it runs now (with the effects added online).
+  const System& system() const { return *sys_; }
   TimeNs held_since_mono_ns() const { return time_base_.held_since_mono_ns(); }
 
  private:
@@ -113,8 +118,10 @@ class FilterStage {
   void PublishModelCheck(TimeNs t);
   int ParamsStatus(bool sigmas_small, TimeNs t) const;
   bool ModelInadequate(const ModelCheckVerdict& v) const;
+  void Augment(const EffectSearchResult& r, const PoseSample& p, TimeNs t);
 
-  const System& sys_;
+  std::shared_ptr<const System> sys_;  // replaced when an effect is added online
+  std::vector<std::string> effects_;   // declared, then those added online
   const FilterStageOptions opt_;
   FilterPrior prior_;
   Eigen::VectorXd prior_sigma_;  // of the configured or resumed prior (convergence test)
@@ -129,6 +136,8 @@ class FilterStage {
   std::unique_ptr<ModelCheck> check_;
   PoseRing recent_;  // poses the filter used, for a batch re-fit when it diverges
   PoseNoiseAdapter adapter_;
+  OnlineEffects online_;
+  std::vector<AddedEffect> added_;
   int consecutive_gated_ = 0;
   bool restart_armed_ = true;  // one restart per divergence episode
   int accepted_in_row_ = 0;    // updates since the last gated pose (re-arms the restart)

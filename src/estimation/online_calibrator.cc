@@ -112,6 +112,7 @@ void OnlineCalibrator::Initialize(TimeNs t_ns, const Eigen::Vector3d& pose,
   const int np = sys_.num_params();
   StateVec x =
       sys_.MakeState(pose.x(), pose.y(), pose.z(), params, controls_, controls_.ToSeconds(t_ns));
+  WarmUpEffectStates(t_ns, &x);
   StateMat P = StateMat::Zero(n, n);
   P.topLeftCorner(3, 3) = pose_cov;  // replaced by ResetPose below
   P.block(3, 3, np, np) = params_cov;
@@ -121,6 +122,21 @@ void OnlineCalibrator::Initialize(TimeNs t_ns, const Eigen::Vector3d& pose,
   initialized_ = true;
   updates_ = 0;
   ResetPose(t_ns, pose, pose_cov);
+}
+
+// Effect states (a lag's realised control, ...) from the controls before t: steady state at
+// the start of the warm-up, then propagated, so that a filter started in mid-motion does not
+// begin with the realised controls equal to the commands.
+void OnlineCalibrator::WarmUpEffectStates(TimeNs t_ns, StateVec* x) const {
+  if (sys_.num_states() == 0 || controls_.empty()) return;
+  const double t1 = controls_.ToSeconds(t_ns);
+  const double t0 = std::max(controls_.TimeAt(0), t1 - kEffectWarmUpS);
+  if (!(t1 > t0)) return;
+  StateVec w = *x;
+  sys_.InitEffectStates(w.data(), controls_, t0);
+  sys_.Propagate(w.data(), w.data(), t0, t1, controls_, static_cast<const double*>(nullptr));
+  const int n = sys_.num_states();
+  x->segment(sys_.state_offset(), n) = w.segment(sys_.state_offset(), n);
 }
 
 void OnlineCalibrator::PredictTo(TimeNs t_ns) {
@@ -178,6 +194,7 @@ void OnlineCalibrator::ResetPose(TimeNs t_ns, const Eigen::Vector3d& z, const Ei
   const int n = sys_.state_dim();
   StateVec x = filter_->mean();
   sys_.ResetEffectStates(&x, controls_, controls_.ToSeconds(t_ns));
+  WarmUpEffectStates(t_ns, &x);
   auto g = [&](const StateVec& xs, const Eigen::Vector3d& zs) {
     StateVec out = xs;
     sys_.SetPoseFromMeasurement(zs.data(), out.data());

@@ -81,6 +81,30 @@ TEST(Windows, NoWindowSpansAGap) {
   }
 }
 
+// A robot carried for 0.9 s (no poses, then put down elsewhere): a window that starts just
+// before and ends just after would predict across the carry. None may.
+TEST(Windows, NoWindowSpansAShortGapInside) {
+  Recording rec = Circle(0.002, 0.004);
+  std::vector<RecordedPose> kept;
+  for (const auto& p : rec.poses) {
+    const double t = NsToSeconds(p.t_ns);
+    if (t > 30.05 && t < 30.95) continue;
+    kept.push_back(p);
+  }
+  rec.poses = kept;
+  std::vector<std::string> warnings;
+  const Dataset d = Prepare(rec, Options(), &warnings);
+  for (const Window& w : d.eval) {
+    const double t0 = d.t[static_cast<size_t>(w.start)], t1 = d.t[static_cast<size_t>(w.end)];
+    EXPECT_FALSE(t0 <= 30.05 && t1 >= 30.95) << "a window from " << t0 << " s spans the carry";
+  }
+  for (const Window& w : d.fit_windows) {
+    const double t0 = d.t[static_cast<size_t>(w.start)], t1 = d.t[static_cast<size_t>(w.end)];
+    EXPECT_FALSE(t0 <= 30.05 && t1 >= 30.95) << "a fit window from " << t0 << " s spans it";
+  }
+  EXPECT_GT(d.fit_windows.size(), 60u);
+}
+
 TEST(Windows, ATooShortRecordingIsAnErrorNamingIt) {
   Recording rec = Circle(0.002, 0.004);
   rec.poses.resize(15);

@@ -8,6 +8,7 @@
 #include <kincal/health_t.hpp>
 #include <kincal/model_check_t.hpp>
 #include <kincal/params_t.hpp>
+#include <map>
 
 #include "daemon/daemon_test_util.h"
 #include "kincal/daemon/daemon.h"
@@ -29,7 +30,7 @@ struct Replayed {
 };
 
 Replayed SimulateAndReplay(const std::string& name, const std::string& hidden_yaml,
-                           double duration_s) {
+                           double duration_s, bool auto_effects = false, int replays = 1) {
   const std::string scenario = TempPath(name + "_scenario.yaml");
   {
     std::ifstream in(test_util::kConfigDir + "/sim_daemon.yaml");
@@ -53,12 +54,23 @@ Replayed SimulateAndReplay(const std::string& name, const std::string& hidden_ya
   replay.source = SourceKind::kReplay;
   replay.replay.path = sim.record.path;
   replay.replay.speed = 0;
-  replay.record.path = TempPath(name + "_replay.lcm");
+  replay.robot.auto_effects = auto_effects;
   Replayed r;
-  {
+  std::vector<std::vector<uint8_t>> first_params;
+  for (int k = 0; k < replays; ++k) {
+    replay.record.path = TempPath(name + "_replay" + std::to_string(k) + ".lcm");
     Daemon d(replay);
     EXPECT_EQ(d.Run(), 0);
     r.counters = d.counters();
+    // Every replay publishes the very same parameters (bytes).
+    LcmLogReader log(replay.record.path);
+    LcmLogEvent ev;
+    std::vector<std::vector<uint8_t>> params;
+    while (log.Next(&ev)) {
+      if (ev.channel == replay.lcm.params_channel) params.push_back(ev.data);
+    }
+    if (k == 0) first_params = params;
+    EXPECT_TRUE(params == first_params) << "replay " << k << " differs from the first";
   }
   LcmLogReader log(replay.record.path);
   LcmLogEvent ev;
@@ -124,6 +136,28 @@ TEST(DaemonModelError, CleanRobotConvergesAndHealthAgrees) {
   EXPECT_EQ(r.counters.filter_resets, 0);
   EXPECT_EQ(int{r.params.back().status}, int{kincal::params_t::STATUS_CONVERGED});
   for (const auto& c : r.checks) EXPECT_EQ(c.num_candidates, 0) << c.evidence;
+  ExpectHealthAgreesWithParams(r);
+}
+
+// robot.effects: auto through the camera and a --fast replay, twice: the lag is found and
+// estimated, and both replays decide and publish bit-identically.
+TEST(DaemonModelError, AutoEffectsFindTheLagAndReplayBitIdentically) {
+  const Replayed r = SimulateAndReplay("lag_auto", "  tau_s: 0.15|hidden_effects: [actuator_lag]",
+                                       90, /*auto_effects=*/true, /*replays=*/2);
+  ASSERT_FALSE(r.checks.empty());
+  const auto& last = r.checks.back();
+  ASSERT_EQ(last.num_added, 1) << last.evidence;
+  EXPECT_EQ(last.effects_added[0], "actuator_lag");
+  EXPECT_LT(last.heldout_after_m[0], 0.5 * last.heldout_before_m[0]);
+  const auto& p = r.params.back();
+  const std::map<std::string, double> truth = {
+      {"r_l", 0.0310}, {"r_r", 0.0313}, {"d", 0.148}, {"tau_s", 0.15}};
+  ASSERT_EQ(p.num_params, 4);
+  for (int i = 0; i < p.num_params; ++i) {
+    EXPECT_NEAR(p.values[i], truth.at(p.names[i]), 3 * p.sigmas[i]) << p.names[i];
+  }
+  EXPECT_NEAR(p.values[3], 0.15, 0.015);
+  EXPECT_LE(r.counters.filter_resets, 1);
   ExpectHealthAgreesWithParams(r);
 }
 

@@ -34,6 +34,7 @@ struct StageScenario {
   Eigen::Vector3d pose_sigma{0.001, 0.001, 0.005};
   uint64_t seed = 1;
   std::vector<size_t> outliers;  // poses (by index) moved 0.5 m: a reflection, a wrong match
+  bool auto_effects = false;     // robot.effects: auto
 };
 
 struct StageRun {
@@ -126,6 +127,8 @@ inline StageRun RunStage(const StageScenario& sc, FilterStageOptions options) {
   const System est = MakeSystem(sc.model, sc.declared);
   const Samples samples = Simulate(sc);
   options.effects = sc.declared;
+  options.auto_effects = sc.auto_effects;
+  options.lossless = true;  // one thread feeds the stage: decisions at fixed data times
   StageRun run;
   CounterSet counters;
   std::deque<ControlSample> queued;

@@ -113,5 +113,66 @@ TEST(FilterStageModelError, HiddenDelayIsNotDivergenceAndIsNamed) {
   EXPECT_LE(at_s, 30.0);
 }
 
+// ---- robot.effects: auto ------------------------------------------------------------------
+
+// The value of an effect parameter lands within 10 % of the truth, every parameter within
+// 3 sigma, and the effect was added once.
+void ExpectEffectFoundOnline(const test_util::StageRun& run, const StageScenario& sc,
+                             const std::string& effect, const std::string& param) {
+  ASSERT_FALSE(run.checks.empty());
+  const auto& last = run.checks.back();
+  ASSERT_EQ(last.num_added, 1) << last.evidence;
+  EXPECT_EQ(last.effects_added[0], effect);
+  EXPECT_LT(last.heldout_after_m[0], last.heldout_before_m[0]);
+  EXPECT_EQ(run.counters.effects_added, 1);
+  EXPECT_NEAR(run.Final(param), sc.truth.at(param), 0.1 * sc.truth.at(param));
+  for (const auto& [name, truth] : sc.truth) {
+    EXPECT_NEAR(run.Final(name), truth, 3 * run.FinalSigma(name)) << name;
+  }
+  EXPECT_LE(run.counters.filter_resets, 1);
+}
+
+TEST(FilterStageAutoEffects, FindsAHiddenLagAndEstimatesIt) {
+  StageScenario sc = HiddenEffect("actuator_lag", "tau_s", 0.15);
+  sc.auto_effects = true;
+  sc.duration_s = 150;
+  const auto run = RunStage(sc, DefaultStageOptions());
+  ExpectEffectFoundOnline(run, sc, "actuator_lag", "tau_s");
+  EXPECT_EQ(int{run.params.back().status}, int{kincal::params_t::STATUS_CONVERGED});
+}
+
+TEST(FilterStageAutoEffects, FindsAHiddenDelayAndEstimatesIt) {
+  StageScenario sc = HiddenEffect("time_offset", "delay_s", 0.10);
+  sc.auto_effects = true;
+  sc.duration_s = 150;
+  const auto run = RunStage(sc, DefaultStageOptions());
+  ExpectEffectFoundOnline(run, sc, "time_offset", "delay_s");
+}
+
+// Ten simulated minutes of a clean robot of each model: no effect is ever added, and the
+// estimate is right.
+TEST(FilterStageAutoEffects, NeverAddsAnEffectToACleanRobot) {
+  for (const auto& m : kincal::testing::AllModelScenarios()) {
+    StageScenario sc;
+    sc.model = m.model;
+    const System sys = MakeSystem(m.model);
+    for (size_t i = 0; i < m.truth.size(); ++i) {
+      const std::string& name = sys.params()[i].name;
+      sc.truth[name] = m.truth[i];
+      sc.guess[name] = m.truth[i] == 0 ? 0.0 : 1.05 * m.truth[i];
+    }
+    sc.duration_s = 600;
+    sc.auto_effects = true;
+    sc.seed = 21;
+    const auto run = RunStage(sc, DefaultStageOptions());
+    EXPECT_EQ(run.counters.effects_added, 0) << m.model << ": " << run.checks.back().evidence;
+    EXPECT_EQ(run.counters.filter_resets, 0) << m.model;
+    for (const auto& [name, truth] : sc.truth) {
+      EXPECT_NEAR(run.Final(name), truth, 3 * run.FinalSigma(name)) << m.model << " " << name;
+    }
+    EXPECT_EQ(int{run.params.back().status}, int{kincal::params_t::STATUS_CONVERGED}) << m.model;
+  }
+}
+
 }  // namespace
 }  // namespace kincal::daemon

@@ -29,8 +29,7 @@ TEST(CeresLogging, RankDeficientCovarianceWarningsGoToOurLogNotStderr) {
   logger->set_level(spdlog::level::debug);
   spdlog::set_default_logger(logger);
   ::testing::internal::CaptureStderr();
-  const BatchResult r =
-      FitBatch(sys, u, meas, Eigen::Vector3d(0.031, 0.031, 0.15), BatchOptions{});
+  const BatchResult r = FitBatch(sys, u, meas, Eigen::Vector3d(0.031, 0.031, 0.15), BatchOptions{});
   const std::string err = ::testing::internal::GetCapturedStderr();
   spdlog::set_default_logger(previous);
   EXPECT_TRUE(r.status.ok()) << r.status.message();

@@ -39,8 +39,11 @@ struct AnalyzeOptions {
   std::map<std::string, double> init;  // initial guesses by parameter name
   std::string effects_mode = "auto";   // "auto", "none" or "list"
   std::vector<std::string> effects;    // candidate specs when effects_mode == "list"
-  double fit_fraction = 0.7;           // first part of the time span used for fitting
-  double horizon_s = 1.0;              // open-loop prediction horizon
+  // Effects already in the model (the baseline is fitted with them; they are not
+  // candidates). kincald's online search passes the effects it runs with.
+  std::vector<std::string> base_effects;
+  double fit_fraction = 0.7;  // first part of the time span used for fitting
+  double horizon_s = 1.0;     // open-loop prediction horizon
   // Pose noise (position m, heading rad) weighting the residuals; estimated from the
   // data (second differences) when not given.
   std::optional<Eigen::Vector2d> pose_sigma;

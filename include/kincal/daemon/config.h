@@ -107,7 +107,8 @@ struct PoseOptions {
 
 struct RobotOptions {
   std::string model = "diffdrive";
-  std::vector<std::string> effects;
+  std::vector<std::string> effects;     // declared
+  bool auto_effects = false;            // "auto": add effects online when the check is decisive
   std::map<std::string, double> guess;  // initial parameter values (default: model defaults)
   double guess_sigma_fraction = 0.2;
   ControlStamp control_stamp = ControlStamp::kReceive;

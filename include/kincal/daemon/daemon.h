@@ -39,6 +39,7 @@ namespace kincal::daemon {
   X(time_resets, "a clock jumped back: new time base, parameters kept")                    \
   X(discarded_at_reset, "poses and controls still on the old time base after one")         \
   X(source_restarts, "the device failed and was reopened")                                 \
+  X(effects_added, "effects added online (robot.effects: auto)")                           \
   X(controls_received, "control messages accepted")                                        \
   X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)") \
   X(controls_out_of_order, "controls older than the newest one: ignored")                  \

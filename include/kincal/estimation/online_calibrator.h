@@ -117,6 +117,9 @@ class OnlineCalibrator {
   std::string_view filter_name() const { return filter_->name(); }
 
  private:
+  static constexpr double kEffectWarmUpS = 2.0;
+  void WarmUpEffectStates(TimeNs t_ns, StateVec* x) const;
+
   const System& sys_;
   OnlineCalibratorOptions options_;
   ControlSignal controls_;
