@@ -234,6 +234,8 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("min_circularity", &c.detector.min_circularity);
     s.Get("min_fill", &c.detector.min_fill);
     s.Get("min_contrast", &c.detector.min_contrast);
+    s.Get("flatten_background", &c.detector.flatten_background);
+    s.Get("background_tile_px", &c.detector.background_tile_px);
     s.CheckUnknown();
   }
   {

@@ -19,11 +19,11 @@ namespace kincal::daemon {
 
 struct EffectSearchResult {
   bool ok = false;
-  std::string error;                 // why the search failed (too little data, no fit)
-  std::vector<std::string> added;    // effects the selection accepted (empty: none)
+  std::string error;                  // why the search failed (too little data, no fit)
+  std::vector<std::string> added;     // effects the selection accepted (empty: none)
   std::vector<ParamEstimate> params;  // of the augmented model (model's, then effects')
   double heldout_before_m = 0, heldout_after_m = 0;  // position RMS at the horizon
-  std::string evidence;                               // one line per trial
+  std::string evidence;                              // one line per trial
 };
 
 class EffectSearch {

@@ -35,8 +35,9 @@ Recording OnlineEffects::Window(TimeNs t_ns, const PoseRing& recent) const {
   const int last = history_.IndexAt(history_.ToSeconds(t_ns));
   for (int i = first; i <= last; ++i) {
     const auto& v = history_.ValuesAt(i);
-    rec.controls.Append(history_.ToNs(history_.TimeAt(i)),
-                        std::span<const double>(v.data(), static_cast<size_t>(history_.num_channels())));
+    rec.controls.Append(
+        history_.ToNs(history_.TimeAt(i)),
+        std::span<const double>(v.data(), static_cast<size_t>(history_.num_channels())));
   }
   for (size_t k = 0; k < recent.size(); ++k) {
     const PoseSample& p = recent.at(k);
@@ -71,8 +72,9 @@ void OnlineEffects::OnCheck(TimeNs t_ns, const ModelCheckVerdict& verdict, const
   if (search_.Start(Window(t_ns, recent), std::move(o))) {
     started_ns_ = t_ns;
     ++searches_;
-    spdlog::info("model check suspects {}: searching the last {:.0f} s for an effect the model lacks",
-                 verdict.suspected_effect, opt_.window_s);
+    spdlog::info(
+        "model check suspects {}: searching the last {:.0f} s for an effect the model lacks",
+        verdict.suspected_effect, opt_.window_s);
   }
 }
 
@@ -89,8 +91,7 @@ std::optional<EffectSearchResult> OnlineEffects::OnPose(TimeNs t_ns) {
   started_ns_ = kNone;
   if (!r->ok || r->added.empty()) {
     spdlog::info("effect search: {}; next search in {:.0f} s",
-                 r->ok ? "no effect explains the residuals better (" + r->evidence + ")"
-                       : r->error,
+                 r->ok ? "no effect explains the residuals better (" + r->evidence + ")" : r->error,
                  cooldown_s_);
     next_allowed_ns_ = t_ns + SecondsToNs(cooldown_s_);
     cooldown_s_ = std::min(2.0 * cooldown_s_, opt_.max_cooldown_s);

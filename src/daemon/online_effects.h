@@ -27,13 +27,13 @@ namespace kincal::daemon {
 
 struct OnlineEffectsOptions {
   bool enabled = false;
-  bool lossless = false;        // a replay with --fast: results applied at fixed data times
-  double window_s = 60.0;       // the search's window of recent data (at most)
-  double min_window_s = 30.0;   // no search before this much data in the window
-  double cooldown_s = 30.0;     // data time between searches (doubles after each fruitless one)
+  bool lossless = false;       // a replay with --fast: results applied at fixed data times
+  double window_s = 60.0;      // the search's window of recent data (at most)
+  double min_window_s = 30.0;  // no search before this much data in the window
+  double cooldown_s = 30.0;    // data time between searches (doubles after each fruitless one)
   double max_cooldown_s = 480.0;
-  double apply_after_s = 5.0;   // lossless: results applied this long after the start
-  int max_effects = 4;          // effects added online at most
+  double apply_after_s = 5.0;  // lossless: results applied this long after the start
+  int max_effects = 4;         // effects added online at most
 };
 
 // One effect added, for model_check_t.
@@ -70,7 +70,7 @@ class OnlineEffects {
   OnlineEffectsOptions opt_;
   EffectSearch search_;
   ControlSignal history_;
-  TimeNs started_ns_ = kNone;     // the running search's start (data time)
+  TimeNs started_ns_ = kNone;  // the running search's start (data time)
   TimeNs next_allowed_ns_ = kNone;
   double cooldown_s_;
   int searches_ = 0, added_ = 0;

@@ -16,10 +16,10 @@ namespace kincal::vision {
 bool DetectorOptions::IsValid(std::string* error) const {
   if (threshold > 255 || min_area_px < 1 || max_area_px < min_area_px || !(min_circularity > 0) ||
       min_circularity > 1 || !(min_fill > 0) || min_fill > 1 || min_contrast < 0 ||
-      min_contrast > 255) {
+      min_contrast > 255 || background_tile_px < 8) {
     *error =
         "detector: threshold <= 255, 1 <= min_area <= max_area, circularity and fill in (0, 1], "
-        "min_contrast in [0, 255]";
+        "min_contrast in [0, 255], background_tile_px >= 8";
     return false;
   }
   return true;
@@ -64,6 +64,86 @@ int Find(std::vector<Blob>& b, int i) {
 struct Run {
   int x0, x1, blob;
 };
+
+// Regions at least this large (pixels) are flattened (DetectorOptions::flatten_background).
+constexpr int kFlattenMinArea = 320 * 240;
+// The floor's level in a tile: this quantile of its (sampled) pixels, from the bright end
+// for dark markers.
+constexpr double kBackgroundQuantile = 0.9;
+// After flattening, the floor sits at this grey level (headroom for bright markers).
+constexpr double kFlatLevel = 200.0;
+
+// The floor's brightness, interpolated over the view from per-tile quantiles, divided out:
+// out = kFlatLevel * view / background (dark markers) or, for bright markers on a dark
+// floor, view - background + a fixed offset (a dark floor's level is mostly offset).
+void FlattenBackground(const cv::Mat& view, bool dark_on_light, int tile, cv::Mat* out) {
+  const int tx = (view.cols + tile - 1) / tile, ty = (view.rows + tile - 1) / tile;
+  thread_local cv::Mat levels, spread, background;
+  thread_local std::vector<uint8_t> samples;
+  levels.create(ty, tx, CV_32F);
+  for (int j = 0; j < ty; ++j) {
+    for (int i = 0; i < tx; ++i) {
+      samples.clear();
+      const int y1 = std::min(view.rows, (j + 1) * tile), x1 = std::min(view.cols, (i + 1) * tile);
+      for (int y = j * tile; y < y1; y += 2) {
+        const uint8_t* row = view.ptr<uint8_t>(y);
+        for (int x = i * tile; x < x1; x += 2) samples.push_back(row[x]);
+      }
+      const double q = dark_on_light ? kBackgroundQuantile : 1.0 - kBackgroundQuantile;
+      const auto k =
+          samples.begin() + static_cast<long>(q * static_cast<double>(samples.size() - 1));
+      std::nth_element(samples.begin(), k, samples.end());
+      levels.at<float>(j, i) = static_cast<float>(*k);
+    }
+  }
+  // A marker (or a plate) filling a tile: the brightest (darkest) neighbour is the floor.
+  if (dark_on_light) {
+    cv::dilate(levels, spread, cv::Mat());
+  } else {
+    cv::erode(levels, spread, cv::Mat());
+  }
+  cv::resize(spread, background, view.size(), 0, 0, cv::INTER_LINEAR);
+  out->create(view.size(), CV_8UC1);
+  for (int y = 0; y < view.rows; ++y) {
+    const uint8_t* in = view.ptr<uint8_t>(y);
+    const float* b = background.ptr<float>(y);
+    uint8_t* o = out->ptr<uint8_t>(y);
+    for (int x = 0; x < view.cols; ++x) {
+      o[x] = dark_on_light ? cv::saturate_cast<uint8_t>(kFlatLevel * in[x] / std::max(b[x], 1.0f))
+                           : cv::saturate_cast<uint8_t>(in[x] - b[x] + (255.0 - kFlatLevel));
+    }
+  }
+}
+
+// The threshold of a flattened view: half way between the floor (the median) and the
+// darkest (brightest) kMarkerFraction of the pixels; -1 when they differ by less than twice
+// `min_contrast` (nothing but floor in view). Otsu would split the floor's own noise here:
+// markers are a tiny fraction of a whole frame.
+constexpr double kMarkerFraction = 1e-4;
+int FlatThreshold(const cv::Mat& flat, bool dark_on_light, int min_contrast) {
+  std::array<int64_t, 256> hist{};
+  int64_t n = 0;
+  for (int y = 0; y < flat.rows; y += kOtsuStride) {
+    const uint8_t* row = flat.ptr<uint8_t>(y);
+    for (int x = 0; x < flat.cols; x += kOtsuStride) {
+      ++hist[row[x]];
+      ++n;
+    }
+  }
+  auto quantile = [&](double q) {
+    const auto target = static_cast<int64_t>(q * static_cast<double>(n));
+    int64_t c = 0;
+    for (int v = 0; v < 256; ++v) {
+      c += hist[static_cast<size_t>(v)];
+      if (c > target) return v;
+    }
+    return 255;
+  };
+  const int floor = quantile(0.5);
+  const int marker = quantile(dark_on_light ? kMarkerFraction : 1.0 - kMarkerFraction);
+  if (std::abs(floor - marker) < 2 * min_contrast) return -1;
+  return (floor + marker) / 2;
+}
 
 // Otsu threshold from a histogram of every other pixel of every other row; -1 when the
 // two classes it separates differ by less than `min_contrast` grey levels (an empty,
@@ -202,8 +282,16 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
   roi &= cv::Rect(0, 0, grey.cols, grey.rows);
   std::vector<Marker> out;
   if (roi.area() == 0) return out;
-  const cv::Mat view = grey(roi);
-  const int thr = opt.threshold >= 0 ? opt.threshold : OtsuThreshold(view, opt.min_contrast);
+  cv::Mat view = grey(roi);
+  int thr = opt.threshold;
+  if (opt.flatten_background && opt.threshold < 0 && roi.area() >= kFlattenMinArea) {
+    thread_local cv::Mat flat;
+    FlattenBackground(view, opt.dark_on_light, opt.background_tile_px, &flat);
+    view = flat;
+    thr = FlatThreshold(view, opt.dark_on_light, opt.min_contrast);
+  } else if (thr < 0) {
+    thr = OtsuThreshold(view, opt.min_contrast);
+  }
   if (thr < 0) return out;
   thread_local std::vector<Blob> blobs;
   blobs.clear();

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -50,6 +51,60 @@ TEST(Markers, SubPixelCentresOnSyntheticImages) {
   const double rms = std::sqrt(sq / n);
   RecordProperty("centre_rms_px", std::to_string(rms));
   EXPECT_LE(rms, 0.02) << "centre RMS per axis " << rms << " px";
+}
+
+// A 1280x960 camera 6 m above a floor lit unevenly, with strong vignetting and JPEG
+// artefacts (a ceiling camera over an arena): the default detector finds the target
+// anywhere in the frame, no threshold tuned.
+TEST(Markers, DefaultsFindTheTargetUnderVignettingUnevenLightAndJpeg) {
+  CameraModel cam;
+  cam.width = 1280;
+  cam.height = 960;
+  cam.fx = cam.fy = 1000;
+  cam.cx = 640.5;
+  cam.cy = 479.5;
+  cam.k1 = -0.2;
+  cam.k2 = 0.06;
+  FloorExtrinsics floor = Overhead();
+  floor.t_cf = Eigen::Vector3d(0.0, 0.0, 6.0);
+  TargetLayout layout = TargetLayout::Thesis();
+  for (auto& m : layout.markers) m *= 4.0;  // a plate for 6 m: markers ~ 11 px across
+  layout.marker_radius_m *= 4.0;
+  layout.plate_size_m *= 4.0;
+  std::mt19937_64 rng(5);
+  RenderOptions ro;
+  ro.vignetting = 0.6;
+  ro.noise_sigma = 2.0;
+  DetectorOptions dopt;
+  int found = 0;
+  double sq = 0;
+  int n = 0;
+  const Eigen::Vector3d places[] = {{0, 0, 0.3},      {2.4, 1.7, 1.0},   {-2.5, 1.8, -2.0},
+                                    {2.5, -1.8, 2.5}, {-2.4, -1.7, 0.2}, {1.2, -0.4, -1.0}};
+  for (const auto& q : places) {
+    const RenderedFrame fr = RenderTarget(cam, TargetPose(floor, q, 0.1), layout, ro, rng);
+    cv::Mat lit(fr.image.size(), CV_8UC1);
+    for (int y = 0; y < lit.rows; ++y) {
+      for (int x = 0; x < lit.cols; ++x) {  // light falling off from left to right
+        const double gain = 1.1 - 0.45 * x / lit.cols;
+        lit.at<uint8_t>(y, x) = cv::saturate_cast<uint8_t>(gain * fr.image.at<uint8_t>(y, x));
+      }
+    }
+    std::vector<uint8_t> jpeg;
+    cv::imencode(".jpg", lit, jpeg, {cv::IMWRITE_JPEG_QUALITY, 70});
+    const cv::Mat grey = cv::imdecode(jpeg, cv::IMREAD_GRAYSCALE);
+    auto markers = DetectMarkers(grey, dopt);
+    if (!IdentifyTarget(cam, layout, &markers)) continue;
+    ++found;
+    for (const auto& m : markers) {
+      if (m.id < 0) continue;
+      sq += (m.centre_px - fr.centres[static_cast<size_t>(m.id)]).squaredNorm() / 2.0;
+      ++n;
+    }
+  }
+  EXPECT_EQ(found, 6);
+  ASSERT_GT(n, 0);
+  EXPECT_LT(std::sqrt(sq / n), 0.25) << "centre RMS per axis, px";
 }
 
 TEST(Markers, IdentifiesTheTargetAmongDistractorsAndRejectsNonCircles) {

@@ -1,6 +1,7 @@
 // Circular marker detection with sub-pixel centres, and target identification.
 //
-// Threshold (Otsu within the search region unless fixed), connected components, shape
+// Background flattening (whole-frame searches: vignetting and uneven light divided out),
+// threshold (Otsu within the search region unless fixed), connected components, shape
 // tests (area, circularity from second moments, fill ratio), then an intensity-weighted
 // centre: every pixel around a blob counts by how much of it the marker covers, estimated
 // from its grey level between the local background and the marker's own level, so
@@ -25,6 +26,13 @@ struct DetectorOptions {
   double min_circularity = 0.6;  // minor/major axis ratio of the blob's ellipse
   double min_fill = 0.6;         // blob area / area of that ellipse
   int min_contrast = 20;         // Otsu: grey levels between the classes, else no markers
+  // Large search regions (a whole frame): estimate the floor's brightness per tile (a
+  // high quantile for dark markers, a low one for bright markers, the brightest (darkest)
+  // of each tile's neighbours so that a marker filling a tile does not count), interpolate
+  // it, and divide it out before the threshold: vignetting and uneven light are
+  // multiplicative and vanish. Small regions (tracking) are flat enough without.
+  bool flatten_background = true;
+  int background_tile_px = 64;
   bool IsValid(std::string* error) const;
 };
 
