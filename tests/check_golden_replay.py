@@ -3,7 +3,8 @@ what the same log held when it was recorded: every pose, markers, params and mod
 event, stamp and bytes, must be equal. A refactoring must leave it passing.
 
 Recorded 2026-11-23 before the daemon was split into stages; re-recorded 2026-11-24 when
-the filter stage's behaviour changed on purpose (issue 15: adaptive noise, honest status,
+the filter stage's behaviour changed on purpose (issue 15: adaptive noise, robust updates,
+honest status, pose covariance calibrated to the residuals,
 model_check_t schema 2), by replaying the previous golden log through the new binary:
   kincald -c tests/data/kincald_golden.yaml --replay OLD --fast --record NEW --lcm-url memq://
 

@@ -30,6 +30,11 @@ constexpr double kRefitMaxSigmaRatio = 3.0;
 // ... and its cost on the window is below this fraction of the running estimate's: the
 // running parameters are wrong, not just the model (which would leave both fits poor).
 constexpr double kRefitMaxCostFraction = 0.25;
+// Beyond the gate this many times in a row, poses are used with a widened covariance
+// (robust update) instead of being dropped: the innovations are persistent, not outliers.
+constexpr int kRobustAfterGated = 2;
+// Status DIVERGED: beyond the gate this many times filter.divergence_gated poses in a row.
+constexpr int kDivergedStreakFactor = 3;
 // An effect added online starts from the search's fit with its sigmas times this.
 constexpr double kAugmentSigmaInflation = 2.0;
 // Without an accepted re-fit, the running estimate restarts with its covariance times this.
@@ -252,14 +257,26 @@ void FilterStage::Update(const PoseSample& p, TimeNs t) {
                extra * dt_s, dt_s);
   check_->Add(t, r, cal_->state(), cal_->controls());  // gated innovations are evidence too
   if (r.gated) {
-    counters_.poses_gated.fetch_add(1);
     accepted_in_row_ = 0;
-    if (++consecutive_gated_ >= opt_.filter.divergence_gated && restart_armed_) {
+    ++consecutive_gated_;
+    if (consecutive_gated_ >= opt_.filter.divergence_gated && restart_armed_) {
+      counters_.poses_gated.fetch_add(1);
       Recover(p, t, /*diverged=*/true);
+      return;
     }
-    return;
+    if (consecutive_gated_ < kRobustAfterGated) {  // an isolated outlier: not used
+      counters_.poses_gated.fetch_add(1);
+      return;
+    }
+    // Persistent: the model, not the pose, is off. Use the pose with its covariance
+    // widened to bring it to the gate (a robust update), so the filter never stalls.
+    const UpdateResult robust =
+        cal_->AddPose(t, p.xytheta, p.covariance * (r.nis / opt_.filter.gate_nis), 0.0);
+    if (!robust.ok) return;
+    counters_.poses_downweighted.fetch_add(1);
+  } else {
+    consecutive_gated_ = 0;
   }
-  consecutive_gated_ = 0;
   last_update_ns_ = t;
   counters_.updates.fetch_add(1);
   ++accepted_in_row_;
@@ -390,9 +407,15 @@ bool FilterStage::ModelInadequate(const ModelCheckVerdict& v) const {
 
 // The status the parameters are published with; health reports the same.
 int FilterStage::ParamsStatus(bool sigmas_small, TimeNs t) const {
-  if (consecutive_gated_ >= opt_.filter.divergence_gated) return kincal::params_t::STATUS_DIVERGED;
+  // Robust updates that have not brought the innovations back within the gate for this
+  // long: the filter has lost the robot. Shorter streaks are the model's error.
+  if (consecutive_gated_ >= kDivergedStreakFactor * opt_.filter.divergence_gated) {
+    return kincal::params_t::STATUS_DIVERGED;
+  }
   const ModelCheckVerdict verdict = check_->Verdict();
-  if (ModelInadequate(verdict)) return kincal::params_t::STATUS_MODEL_INADEQUATE;
+  if (ModelInadequate(verdict) || consecutive_gated_ >= opt_.filter.divergence_gated) {
+    return kincal::params_t::STATUS_MODEL_INADEQUATE;
+  }
   const bool updated_recently =
       last_update_ns_ != TimeBase::kNever && t - last_update_ns_ <= max_gap_ns_;
   if (sigmas_small && updated_recently && consecutive_gated_ == 0 && verdict.consistent &&

@@ -7,6 +7,14 @@
 namespace kincal::daemon {
 namespace {
 
+// The centre noise is a running mean over this many frames ...
+constexpr int kCentreNoiseFrames = 200;
+// ... and never taken below (0.002 px)^2 (a perfect synthetic image).
+constexpr double kMinCentreVariance = 4e-6;
+
+}  // namespace
+namespace {
+
 Eigen::Vector3d FloorPoseOf(const vision::FloorExtrinsics& floor, const vision::Pose3& p) {
   const Eigen::Matrix3d Rft = floor.R_cf.transpose() * p.R;
   const Eigen::Vector3d o = floor.R_cf.transpose() * (p.t - floor.t_cf);
@@ -25,7 +33,10 @@ vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Ve
 
 PoseStage::PoseStage(const PoseOptions& pose, const vision::DetectorOptions& detector,
                      const VisionSetup& v)
-    : opt_(pose), vis_(v), tracker_(v.camera, v.layout, detector) {}
+    : opt_(pose),
+      vis_(v),
+      tracker_(v.camera, v.layout, detector),
+      centre_variance_(pose.sigma_px * pose.sigma_px) {}
 
 bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
   *p = PoseSample{};
@@ -111,6 +122,22 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
   p->valid = true;
   last_pose_ = p->xytheta;
   have_last_ = true;
+  CalibrateCovariance(nm, p);
+}
+
+// The residual variance of a solve, RSS / (residuals - unknowns), is an unbiased sample
+// of the centre noise; its running mean replaces the configured sigma_px, so that the
+// covariance the filter weighs the pose with matches the scatter of the poses.
+void PoseStage::CalibrateCovariance(int num_markers, PoseSample* p) {
+  const int residuals = 2 * num_markers;
+  const int unknowns = opt_.method == PoseMethod::kGroundPlane ? 3 : 6;
+  if (residuals > unknowns) {
+    const double sample = p->rms_px * p->rms_px * residuals / (residuals - unknowns);
+    const double w = 1.0 / std::min(++centre_samples_, kCentreNoiseFrames);
+    centre_variance_ += w * (sample - centre_variance_);
+  }
+  const double configured = opt_.sigma_px * opt_.sigma_px;
+  p->covariance *= std::max(centre_variance_, kMinCentreVariance) / configured;
 }
 
 }  // namespace kincal::daemon

@@ -26,6 +26,7 @@ class PoseStage {
 
  private:
   void Solve(const std::vector<vision::Marker>& markers, PoseSample* p);
+  void CalibrateCovariance(int num_markers, PoseSample* p);
 
   const PoseOptions opt_;
   const VisionSetup& vis_;
@@ -35,6 +36,10 @@ class PoseStage {
   std::array<Eigen::Vector2d, kMaxMarkers> norm_;
   Eigen::Vector3d last_pose_ = Eigen::Vector3d::Zero();
   bool have_last_ = false;
+  // The marker centres' noise as the poses' own residuals show it (px^2, running mean):
+  // the published covariance is scaled to it from the configured pose.sigma_px.
+  double centre_variance_;
+  int centre_samples_ = 0;
 };
 
 }  // namespace kincal::daemon

@@ -22,30 +22,31 @@ namespace kincal::daemon {
 // Every counter kincald keeps, listed once: X(name, meaning). Each is a field of
 // DaemonCounters, of the pipeline's atomic counter set, and of kincal.health_t (lcm/health_t.lcm
 // has a field of the same name for each; the health message is filled from this list).
-#define KINCAL_DAEMON_COUNTERS(X)                                                          \
-  X(frames_captured, "frames the source delivered")                                        \
-  X(frames_dropped_device, "frames the device lost (sequence gaps)")                       \
-  X(frames_dropped_queue, "frames dropped by the full frame queue (live)")                 \
-  X(frames_bad, "undecodable or wrong-sized frames, damaged log stretches")                \
-  X(frames_out_of_order, "pose time repeated or earlier than the last: not used")          \
-  X(poses_valid, "frames that gave a pose")                                                \
-  X(poses_invalid, "frames without the target")                                            \
-  X(poses_published, "pose_t messages published")                                          \
-  X(poses_dropped_queue, "poses dropped by the full pose queue (live)")                    \
-  X(poses_gated, "poses that failed the innovation gate: not used")                        \
-  X(updates, "filter updates")                                                             \
-  X(run_resets, "new runs: a gap between poses longer than filter.max_pose_gap_s")         \
-  X(filter_resets, "divergence: the filter restarted from a batch fit")                    \
-  X(time_resets, "a clock jumped back: new time base, parameters kept")                    \
-  X(discarded_at_reset, "poses and controls still on the old time base after one")         \
-  X(source_restarts, "the device failed and was reopened")                                 \
-  X(effects_added, "effects added online (robot.effects: auto)")                           \
-  X(controls_received, "control messages accepted")                                        \
-  X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)") \
-  X(controls_out_of_order, "controls older than the newest one: ignored")                  \
-  X(controls_late, "controls older than the filter's time: applied from then on")          \
-  X(controls_dropped_queue, "controls dropped by the full control queue (live)")           \
-  X(log_events_written, "events written to the --record log")                              \
+#define KINCAL_DAEMON_COUNTERS(X)                                                            \
+  X(frames_captured, "frames the source delivered")                                          \
+  X(frames_dropped_device, "frames the device lost (sequence gaps)")                         \
+  X(frames_dropped_queue, "frames dropped by the full frame queue (live)")                   \
+  X(frames_bad, "undecodable or wrong-sized frames, damaged log stretches")                  \
+  X(frames_out_of_order, "pose time repeated or earlier than the last: not used")            \
+  X(poses_valid, "frames that gave a pose")                                                  \
+  X(poses_invalid, "frames without the target")                                              \
+  X(poses_published, "pose_t messages published")                                            \
+  X(poses_dropped_queue, "poses dropped by the full pose queue (live)")                      \
+  X(poses_gated, "poses that failed the innovation gate: not used")                          \
+  X(poses_downweighted, "poses beyond the gate in a streak: used with a widened covariance") \
+  X(updates, "filter updates")                                                               \
+  X(run_resets, "new runs: a gap between poses longer than filter.max_pose_gap_s")           \
+  X(filter_resets, "divergence: the filter restarted from a batch fit")                      \
+  X(time_resets, "a clock jumped back: new time base, parameters kept")                      \
+  X(discarded_at_reset, "poses and controls still on the old time base after one")           \
+  X(source_restarts, "the device failed and was reopened")                                   \
+  X(effects_added, "effects added online (robot.effects: auto)")                             \
+  X(controls_received, "control messages accepted")                                          \
+  X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)")   \
+  X(controls_out_of_order, "controls older than the newest one: ignored")                    \
+  X(controls_late, "controls older than the filter's time: applied from then on")            \
+  X(controls_dropped_queue, "controls dropped by the full control queue (live)")             \
+  X(log_events_written, "events written to the --record log")                                \
   X(log_events_lost, "events the recorder dropped (live, its queue full)")
 
 struct DaemonCounters {

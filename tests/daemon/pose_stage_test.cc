@@ -1,0 +1,65 @@
+#include "daemon/pose_stage.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "daemon/daemon_test_util.h"
+#include "kincal/angles.h"
+#include "kincal/vision/target.h"
+
+namespace kincal::daemon {
+namespace {
+
+// The shipped simulated camera (640x480, f 500 px, 2 m up) and its target, rendered with
+// noise at one pose many times: the scatter of the poses is the truth the published
+// covariance must match, whatever pose.sigma_px says.
+struct Scatter {
+  double nees_rms;  // RMS over frames of sqrt(e' P^-1 e / 3): 1 when the covariance is right
+  double pos_rms_m;
+};
+
+Scatter MeasureScatter(double configured_sigma_px, double noise_grey) {
+  DaemonConfig c = test_util::SimConfig(1);
+  c.pose.sigma_px = configured_sigma_px;
+  const VisionSetup vis = LoadVisionSetup(c);
+  PoseStage stage(c.pose, c.detector, vis);
+  vision::RenderOptions ro;
+  ro.noise_sigma = noise_grey;
+  std::mt19937_64 rng(3);
+  const Eigen::Vector3d truth(0.12, -0.07, 0.4);
+  vision::Pose3 pose;
+  pose.R = vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pose.t = vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), vis.target_height_m) +
+           vis.floor.t_cf;
+  double nees = 0, pos = 0;
+  int n = 0;
+  Frame f;
+  PoseSample p;
+  std::string error;
+  for (int k = 0; k < 260; ++k) {
+    const auto fr = vision::RenderTarget(vis.camera, pose, vis.layout, ro, rng);
+    FromGrey(fr.image, &f);
+    f.utime = 1000 * k;
+    if (!stage.Process(f, &p, &error) || !p.valid) continue;
+    if (k < 60) continue;  // the stage learns the centre noise first
+    Eigen::Vector3d e = p.xytheta - truth;
+    e.z() = WrapAngle(e.z());
+    nees += e.dot(p.covariance.ldlt().solve(e)) / 3.0;
+    pos += e.head<2>().squaredNorm() / 2.0;
+    ++n;
+  }
+  EXPECT_GT(n, 190);
+  return {std::sqrt(nees / n), std::sqrt(pos / n)};
+}
+
+TEST(PoseStage, PublishedCovarianceMatchesTheScatter) {
+  for (double configured : {0.05, 0.5}) {
+    const Scatter s = MeasureScatter(configured, 2.0);
+    EXPECT_GT(s.nees_rms, 0.75) << "configured sigma_px " << configured;
+    EXPECT_LT(s.nees_rms, 1.35) << "configured sigma_px " << configured;
+  }
+}
+
+}  // namespace
+}  // namespace kincal::daemon
