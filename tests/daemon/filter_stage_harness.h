@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "daemon/filter_stage.h"
+#include "kincal/io/recording.h"
 #include "kincal/scenario.h"
 #include "kincal/simulator.h"
 #include "test_util.h"
@@ -99,6 +100,22 @@ inline Samples Simulate(const StageScenario& sc) {
     out.poses.push_back(p);
   }
   return out;
+}
+
+// The same samples as a recording for `kincal analyze` (poses' times relative to the first
+// control).
+inline Recording ToRecording(const Samples& s, int num_controls) {
+  Recording rec;
+  rec.source = "simulated";
+  const TimeNs origin = UtimeToPipelineNs(s.controls.front().utime);
+  rec.controls = ControlSignal(num_controls, origin);
+  for (const auto& c : s.controls) {
+    rec.controls.Append(
+        UtimeToPipelineNs(c.utime),
+        std::span<const double>(c.values.data(), static_cast<size_t>(num_controls)));
+  }
+  for (const auto& p : s.poses) rec.poses.push_back({UtimeToPipelineNs(p.utime), p.xytheta});
+  return rec;
 }
 
 inline FilterPrior Prior(const StageScenario& sc, const System& est) {

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+
 #include "daemon/filter_stage_harness.h"
+#include "kincal/analysis/analyze.h"
 
 namespace kincal::daemon {
 namespace {
@@ -172,6 +175,56 @@ TEST(FilterStageAutoEffects, NeverAddsAnEffectToACleanRobot) {
     }
     EXPECT_EQ(int{run.params.back().status}, int{kincal::params_t::STATUS_CONVERGED}) << m.model;
   }
+}
+
+// ---- online equals offline (the MR.CLAM pattern: a delay and speed lost in turns) --------
+
+StageScenario MrclamLike() {
+  StageScenario sc;
+  sc.model = "unicycle";
+  sc.hidden = {"time_offset", "turn_slowdown"};
+  sc.truth = {{"k_v", 0.9}, {"k_omega", 0.85}, {"delay_s", 0.2}, {"c_slow", 0.3}};
+  sc.guess = {{"k_v", 1.0}, {"k_omega", 1.0}};
+  sc.duration_s = 240;
+  sc.seed = 8;
+  return sc;
+}
+
+// The daemon's final parameters against kincal analyze on the same motion, same effects:
+// within max(5 %, 3 sigma) of each other.
+TEST(FilterStageOnlineOffline, DeclaredEffectsAgreeWithAnalyze) {
+  StageScenario sc = MrclamLike();
+  sc.declared = sc.hidden;
+  sc.guess["delay_s"] = 0.1;
+  const auto run = RunStage(sc, DefaultStageOptions());
+  AnalyzeOptions o;
+  o.model = sc.model;
+  o.base_effects = sc.declared;
+  o.effects_mode = "none";
+  const AnalyzeResult offline = Analyze(test_util::ToRecording(test_util::Simulate(sc), 2), o);
+  for (const auto& e : offline.after.params) {
+    const double online = run.Final(e.name), sigma = run.FinalSigma(e.name);
+    EXPECT_NEAR(online, e.value, std::max(0.05 * std::abs(e.value), 3 * sigma))
+        << e.name << ": online " << online << " +- " << sigma << ", analyze " << e.value;
+    EXPECT_NEAR(online, sc.truth.at(e.name), 3 * sigma) << e.name;
+  }
+  EXPECT_LE(run.counters.filter_resets, 1);
+}
+
+TEST(FilterStageOnlineOffline, AutoFindsTheDelayAndTheTurnSlowdown) {
+  StageScenario sc = MrclamLike();
+  sc.auto_effects = true;
+  const auto run = RunStage(sc, DefaultStageOptions());
+  ASSERT_FALSE(run.checks.empty());
+  const auto& last = run.checks.back();
+  std::set<std::string> added(last.effects_added.begin(), last.effects_added.end());
+  EXPECT_EQ(added, (std::set<std::string>{"time_offset", "turn_slowdown"})) << last.evidence;
+  for (const auto& [name, truth] : sc.truth) {
+    EXPECT_NEAR(run.Final(name), truth, 3 * run.FinalSigma(name)) << name;
+  }
+  EXPECT_NEAR(run.Final("delay_s"), 0.2, 0.02);
+  EXPECT_NEAR(run.Final("c_slow"), 0.3, 0.03);
+  EXPECT_LE(run.counters.filter_resets, 1);
 }
 
 }  // namespace

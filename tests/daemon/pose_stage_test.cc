@@ -29,9 +29,10 @@ Scatter MeasureScatter(double configured_sigma_px, double noise_grey) {
   std::mt19937_64 rng(3);
   const Eigen::Vector3d truth(0.12, -0.07, 0.4);
   vision::Pose3 pose;
-  pose.R = vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  pose.t = vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), vis.target_height_m) +
-           vis.floor.t_cf;
+  pose.R =
+      vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  pose.t =
+      vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), vis.target_height_m) + vis.floor.t_cf;
   double nees = 0, pos = 0;
   int n = 0;
   Frame f;
