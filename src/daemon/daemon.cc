@@ -34,6 +34,8 @@ using Clock = std::chrono::steady_clock;
 
 // After a simulated robot's frames end, the last controls it published over LCM arrive.
 constexpr auto kLastControlsWait = std::chrono::milliseconds(200);
+// A standing health problem is logged again this often.
+constexpr double kHealthRepeatS = 10.0;
 // Poses held while waiting for their controls: at least this many.
 constexpr int kMinPendingPoses = 256;
 
@@ -73,6 +75,8 @@ struct Daemon::Impl {
 
   std::optional<Checkpoint> resume;
   HealthReporter health;
+  std::string logged_health;  // main thread only
+  TimeNs logged_health_at = 0;
 
   explicit Impl(DaemonConfig c)
       : cfg(std::move(c)),
@@ -228,7 +232,15 @@ struct Daemon::Impl {
     s.filter_status = filter_status;
     health.Build(Snapshot(), s, period_s, RealtimeUtime(), &h);
     out.Publish(cfg.lcm.health_channel, h.utime, h);
-    if (!h.message.empty()) spdlog::warn("health: {}", h.message);
+    // Logged when it changes, and every kHealthRepeatS while it stands (it is published at
+    // health_rate_hz regardless).
+    const TimeNs now = MonotonicNs();
+    if (h.message != logged_health || now - logged_health_at > SecondsToNs(kHealthRepeatS)) {
+      if (!h.message.empty()) spdlog::warn("health: {}", h.message);
+      if (h.message.empty() && !logged_health.empty()) spdlog::info("health: ok");
+      logged_health = h.message;
+      logged_health_at = now;
+    }
   }
 
   // Every counter: the pipeline's own, and those the components keep.

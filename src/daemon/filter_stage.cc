@@ -452,6 +452,12 @@ void FilterStage::PublishModelCheck(TimeNs t) {
   for (const auto& e : effects_) model += "+" + e;
   kincal::model_check_t m = ModelCheckMessage(verdict, model, utime);
   m.adaptive_noise = adapter_.level();
+  if (verdict.suspected_effect.empty() && adapter_.level() > kInadequateNoiseLevel) {
+    m.evidence = fmt::format(
+        "innovations beyond the model: the filter adds {:.3g} measurement "
+        "variances of pose noise per frame; {}",
+        adapter_.level(), verdict.evidence);
+  }
   m.num_added = static_cast<int32_t>(added_.size());
   for (const auto& a : added_) {
     m.effects_added.push_back(a.name);
