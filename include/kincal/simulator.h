@@ -26,7 +26,9 @@ struct FrameTimingOptions {
   bool IsValid(std::string* error) const;
 };
 
-// Frame timestamps in [t0, t1): intervals of 1/rate, plus U(0, jitter_max) with
+// Frame timestamps from t0 while the running sum of intervals (in seconds) is below t1 (a
+// sum a rounding error short of t1 gives a last frame at t1): intervals of 1/rate, plus
+// U(0, jitter_max) with
 // probability jitter_prob; frames dropped with probability dropout_prob.
 std::vector<TimeNs> FrameTimes(TimeNs t0, TimeNs t1, const FrameTimingOptions& opt,
                                std::mt19937_64& rng);

@@ -1,7 +1,6 @@
 // Replay of a kincald LCM log: frames go through the pipeline again, controls to the
 // filter with their recorded receive times.
 #include <spdlog/spdlog.h>
-#include <sys/stat.h>
 
 #include <atomic>
 #include <cstring>
@@ -19,16 +18,17 @@ namespace {
 class ReplaySource final : public FrameSource {
  public:
   ReplaySource(const ReplayOptions& replay, const LcmOptions& lcm, ControlIntake controls)
-      : opt_(replay), lcm_(lcm), intake_(std::move(controls)) {
-    struct stat st {};
-    if (::stat(opt_.path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
-      throw std::runtime_error(opt_.path + ": cannot open log for replay (no such file)");
-    }
-    log_.emplace(opt_.path);  // throws std::runtime_error naming the file
+      : opt_(replay), lcm_(lcm), intake_(std::move(controls)) {}
+  ~ReplaySource() override {
+    if (log_) ReportDamage();
   }
-  ~ReplaySource() override { ReportDamage(); }
   std::string name() const override { return "replay(" + opt_.path + ")"; }
   Status Start() override {
+    if (!log_) {
+      if (const Status s = LcmLogReader::Open(opt_.path, &log_); !s.ok()) {
+        return Status::Error("replay: " + s.message());
+      }
+    }
     start_mono_ = MonotonicNs();
     return {};
   }
@@ -121,7 +121,7 @@ class ReplaySource final : public FrameSource {
   const ReplayOptions opt_;
   const LcmOptions lcm_;
   ControlIntake intake_;
-  std::optional<LcmLogReader> log_;
+  std::unique_ptr<LcmLogReader> log_;
   LcmLogEvent ev_;
   size_t reported_ = 0;
   kincal::frame_t msg_;

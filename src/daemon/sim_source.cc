@@ -190,7 +190,7 @@ class SimSource final : public FrameSource {
   }
 
   const SimSourceOptions cfg_;
-  const VisionSetup& vis_;
+  const VisionSetup vis_;  // a copy: the source owns what it renders with
   Scenario sc_;
   System truth_;
   ControlIntake intake_;

@@ -1,5 +1,9 @@
 #include "kincal/io/lcm_log_reader.h"
 
+#include <sys/stat.h>
+
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 
 namespace kincal {
@@ -16,14 +20,33 @@ uint64_t BigEndian(const uint8_t* p, int n) {
 
 }  // namespace
 
-LcmLogReader::LcmLogReader(const std::string& path) : path_(path) {
-  f_ = std::fopen(path.c_str(), "rb");
-  if (f_ == nullptr) throw std::runtime_error(path + ": cannot open the LCM log for reading");
-  if (std::fseek(f_, 0, SEEK_END) != 0 || (size_ = std::ftell(f_)) < 0 ||
-      std::fseek(f_, 0, SEEK_SET) != 0) {
-    std::fclose(f_);
-    throw std::runtime_error(path + ": cannot determine the size of the LCM log");
+Status LcmLogReader::Open(const std::string& path, std::unique_ptr<LcmLogReader>* out) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return Status::Error(path + ": cannot open the LCM log: " + std::strerror(errno));
   }
+  if (S_ISDIR(st.st_mode)) {
+    return Status::Error(path + ": is a directory, expected an LCM log file");
+  }
+  if (!S_ISREG(st.st_mode)) {
+    return Status::Error(path + ": is not a regular file, expected an LCM log file");
+  }
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) {
+    return Status::Error(path + ": cannot open the LCM log: " + std::strerror(errno));
+  }
+  out->reset(new LcmLogReader(path, f, static_cast<int64_t>(st.st_size)));
+  return {};
+}
+
+LcmLogReader::LcmLogReader(std::string path, std::FILE* f, int64_t size)
+    : path_(std::move(path)), f_(f), size_(size) {}
+
+LcmLogReader::LcmLogReader(const std::string& path) : path_(path) {
+  std::unique_ptr<LcmLogReader> opened;
+  if (const Status s = Open(path, &opened); !s.ok()) throw std::runtime_error(s.message());
+  std::swap(f_, opened->f_);
+  size_ = opened->size_;
 }
 
 LcmLogReader::~LcmLogReader() {

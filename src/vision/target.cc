@@ -23,6 +23,16 @@ bool TargetLayout::IsValid(std::string* error) const {
     *error = "marker_radius_m must be > 0";
     return false;
   }
+  for (size_t i = 0; i < markers.size(); ++i) {
+    for (size_t j = i + 1; j < markers.size(); ++j) {
+      if ((markers[i] - markers[j]).norm() < 2.0 * marker_radius_m) {
+        *error = "markers " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
+                 " overlap: centres closer than two radii (" +
+                 std::to_string(2.0 * marker_radius_m) + " m)";
+        return false;
+      }
+    }
+  }
   return true;
 }
 

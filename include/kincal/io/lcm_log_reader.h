@@ -11,8 +11,11 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include "kincal/status.h"
 
 namespace kincal {
 
@@ -29,7 +32,10 @@ class LcmLogReader {
   // Largest channel name LCM allows (lcm.h: LCM_MAX_CHANNEL_NAME_LENGTH is 63).
   static constexpr int32_t kMaxChannelLength = 63;
 
-  // Throws std::runtime_error naming the file when it cannot be opened.
+  // Opens a log: an error names the file and why (errno's text; a directory or anything
+  // but a regular file is not a log).
+  static Status Open(const std::string& path, std::unique_ptr<LcmLogReader>* out);
+  // Throwing form of Open (std::runtime_error with the same message).
   explicit LcmLogReader(const std::string& path);
   ~LcmLogReader();
   LcmLogReader(const LcmLogReader&) = delete;
@@ -52,6 +58,7 @@ class LcmLogReader {
   const std::vector<std::string>& problems() const { return problems_; }
 
  private:
+  LcmLogReader(std::string path, std::FILE* f, int64_t size);
   bool Resync(int64_t from, int64_t scan);
   void Problem(const std::string& what);
 

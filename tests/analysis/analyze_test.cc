@@ -2,11 +2,13 @@
 // effect (or two) from the estimator, `Analyze` starts from the bare model, and must name
 // the effect, recover its parameters within 3 sigma and at least halve the held-out
 // residual. On clean data it must not invent effects.
+#include "kincal/analysis/analyze.h"
+
 #include <gtest/gtest.h>
 
+#include <array>
 #include <random>
 
-#include "kincal/analysis/analyze.h"
 #include "kincal/simulator.h"
 #include "test_util.h"
 
@@ -213,6 +215,30 @@ TEST(Timing, ClockOffsetOfSecondsIsFound) {
     if (p.name == "delay_s") {
       EXPECT_NEAR(p.value, 1.7, 3.0 * p.sigma);
     }
+  }
+}
+
+TEST(Identifiability, UnobservableParameterIsNamedWithTheMotionThatExcitesIt) {
+  // A robot that only drives straight: k_omega cannot be identified.
+  Recording rec;
+  rec.controls = ControlSignal(2, 0);
+  const std::array<double, 2> straight = {0.5, 0.0};
+  for (int k = 0; k <= 600; ++k) {
+    const double t = 0.05 * k;
+    rec.controls.Append(SecondsToNs(t), straight);
+    rec.poses.push_back({SecondsToNs(t), Eigen::Vector3d(0.45 * t, 0.0, 0.0)});
+  }
+  AnalyzeOptions o;
+  o.model = "unicycle";
+  o.effects_mode = "none";
+  o.pose_sigma = Eigen::Vector2d(0.001, 0.001);
+  try {
+    Analyze(rec, o);
+    FAIL() << "expected an unobservability error";
+  } catch (const AnalysisError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("parameter 'k_omega' is not identifiable"), std::string::npos) << m;
+    EXPECT_NE(m.find("excite it with turning"), std::string::npos) << m;
   }
 }
 

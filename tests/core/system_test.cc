@@ -1,5 +1,6 @@
-// Kinematic models and effects: derivatives against finite differences, exact
-// integration against fine Euler, and the sign and timing conventions.
+// System (a model with its effects): autodiff derivatives of the propagation and the
+// measurement against finite differences for every registered model with every effect,
+// and the exact arc integration against fine Euler.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -124,88 +125,6 @@ INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 4),
                          [](const ::testing::TestParamInfo<int>& info) {
                            return AllModelScenarios()[static_cast<size_t>(info.param)].model;
                          });
-
-Twist<double> TwistOf(const char* model, std::vector<double> p, std::vector<double> u) {
-  return MakeModel(model)->BodyTwist(p.data(), u.data());
-}
-
-TEST(Conventions, PositiveSteeringAndFasterRightWheelTurnLeft) {
-  EXPECT_GT(TwistOf("diffdrive", {0.03, 0.03, 0.15}, {10.0, 12.0}).omega, 0.0);
-  EXPECT_NEAR(TwistOf("diffdrive", {0.03, 0.03, 0.15}, {10.0, 12.0}).omega, 0.03 * 2.0 / 0.15,
-              1e-12);
-  EXPECT_GT(TwistOf("ackermann", {0.05, 0.3, 0.0}, {10.0, 0.2}).omega, 0.0);
-  EXPECT_GT(TwistOf("tricycle", {0.001, 0.0, 1e-4, 0.5}, {200.0, 5000.0}).omega, 0.0);
-  // Ackermann with a driven rear wheel: forward speed is R_B * omega, no cos(phi).
-  EXPECT_NEAR(TwistOf("ackermann", {0.05, 0.3, 0.0}, {10.0, 0.4}).vx, 0.5, 1e-12);
-  // Tricycle: the front wheel drives, the rear-axle midpoint moves at v_f cos(phi).
-  EXPECT_NEAR(TwistOf("tricycle", {0.001, 0.0, 1e-4, 0.5}, {400.0, 5000.0}).vx, 0.5 * std::cos(0.4),
-              1e-12);
-}
-
-TEST(Effects, TimeOffsetDelaysTheMotion) {
-  const System sys = MakeSystem("unicycle", {"time_offset"});
-  ControlSignal u(2, 0);
-  const std::array<double, 2> go = {1.0, 0.0};
-  u.Append(SecondsToNs(1.0), go);
-  VecN<kMaxState> p(3);
-  p << 0.8, 1.0, 0.2;  // k_v, k_omega, delay_s
-  StateVec x = sys.MakeState(0, 0, 0, p, u, 0.0);
-  StateVec out(x.size());
-  sys.Propagate(x.data(), out.data(), 0.0, 1.15, u, static_cast<const double*>(nullptr));
-  EXPECT_EQ(out[0], 0.0);
-  sys.Propagate(x.data(), out.data(), 0.0, 1.5, u, static_cast<const double*>(nullptr));
-  EXPECT_NEAR(out[0], 0.8 * 0.3, 1e-12);
-}
-
-TEST(Effects, ActuatorLagFollowsFirstOrderResponseExactly) {
-  const System sys = MakeSystem("unicycle", {"actuator_lag[v]"});
-  ControlSignal u(2, 0);
-  const std::array<double, 2> go = {1.0, 0.0};
-  u.Append(SecondsToNs(1.0), go);
-  VecN<kMaxState> p(3);
-  const double tau = 0.25, kv = 0.9;
-  p << kv, 1.0, tau;
-  StateVec x = sys.MakeState(0, 0, 0, p, u, 0.0);
-  EXPECT_EQ(x[6], 0.0);  // lag state at rest before the command
-  for (double t : {1.1, 1.25, 2.0}) {
-    StateVec out(x.size());
-    sys.Propagate(x.data(), out.data(), 0.0, t, u, static_cast<const double*>(nullptr));
-    const double s = t - 1.0;
-    EXPECT_NEAR(out[0], kv * (s - tau * (1.0 - std::exp(-s / tau))), 1e-12) << t;
-    EXPECT_NEAR(out[6], 1.0 - std::exp(-s / tau), 1e-12) << t;
-  }
-}
-
-TEST(Effects, LeverArmMovesTheMeasuredPoint) {
-  const System sys = MakeSystem("unicycle", {"lever_arm"});
-  StateVec x(sys.state_dim());
-  x << 1.0, 2.0, M_PI / 2, 1.0, 1.0, 0.1, 0.02, 0.05;
-  double z[3];
-  sys.Measure(x.data(), z);
-  EXPECT_NEAR(z[0], 1.0 - 0.02, 1e-12);
-  EXPECT_NEAR(z[1], 2.0 + 0.1, 1e-12);
-  EXPECT_NEAR(z[2], M_PI / 2 + 0.05, 1e-12);
-  StateVec back = x;
-  back.head(3).setZero();
-  sys.SetPoseFromMeasurement(z, back.data());
-  EXPECT_NEAR((back - x).norm(), 0.0, 1e-12);
-}
-
-TEST(Effects, BadSpecsGetClearErrors) {
-  EXPECT_THROW(
-      {
-        try {
-          MakeSystem("unicycle", {"actuator_lag[wheel]"});
-        } catch (const std::invalid_argument& e) {
-          EXPECT_NE(std::string(e.what()).find("has no control 'wheel'"), std::string::npos);
-          throw;
-        }
-      },
-      std::invalid_argument);
-  EXPECT_THROW(MakeSystem("unicycle", {"warp_drive"}), std::invalid_argument);
-  EXPECT_THROW(MakeSystem("hovercraft"), std::invalid_argument);
-  EXPECT_THROW(MakeSystem("unicycle", {"lever_arm", "lever_arm"}), std::invalid_argument);
-}
 
 }  // namespace
 }  // namespace kincal

@@ -1,9 +1,9 @@
 // On a linear Gaussian model every filter must reproduce the Kalman filter.
+#include "kincal/estimation/filter.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "kincal/estimation/filter.h"
 
 namespace kincal {
 namespace {
@@ -100,21 +100,5 @@ TEST(LinearGaussian, EveryFilterEqualsTheKalmanFilter) {
     EXPECT_LT(rel_p, 1e-8) << name;
   }
 }
-
-TEST(Triangularize, FactorReproducesTheProductAndIsLowerTriangular) {
-  std::mt19937_64 rng(3);
-  std::normal_distribution<double> g(0.0, 1.0);
-  CompoundMat A(5, 13);
-  for (int i = 0; i < A.rows(); ++i)
-    for (int j = 0; j < A.cols(); ++j) A(i, j) = g(rng);
-  StateMat L;
-  Triangularize(A, &L);
-  EXPECT_LT((L * L.transpose() - A * A.transpose()).norm(), 1e-12);
-  for (int i = 0; i < 5; ++i) {
-    EXPECT_GE(L(i, i), 0.0);
-    for (int j = i + 1; j < 5; ++j) EXPECT_EQ(L(i, j), 0.0);
-  }
-}
-
 }  // namespace
 }  // namespace kincal

@@ -1,0 +1,61 @@
+// Effect specs: parsing, binding to a model's channels, and the errors for bad ones.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "kincal/effect.h"
+#include "kincal/system.h"
+
+namespace kincal {
+namespace {
+
+TEST(Effect, BadSpecsGetClearErrors) {
+  EXPECT_THROW(
+      {
+        try {
+          MakeSystem("unicycle", {"actuator_lag[wheel]"});
+        } catch (const std::invalid_argument& e) {
+          EXPECT_NE(std::string(e.what()).find("has no control 'wheel'"), std::string::npos);
+          throw;
+        }
+      },
+      std::invalid_argument);
+  EXPECT_THROW(MakeSystem("unicycle", {"warp_drive"}), std::invalid_argument);
+  EXPECT_THROW(MakeSystem("hovercraft"), std::invalid_argument);
+  EXPECT_THROW(MakeSystem("unicycle", {"lever_arm", "lever_arm"}), std::invalid_argument);
+}
+
+TEST(Effect, SpecsParseIntoNameAndChannels) {
+  EffectSpec spec;
+  ASSERT_TRUE(ParseEffectSpec("actuator_lag[omega_l,omega_r]", &spec).ok());
+  EXPECT_EQ(spec.name, "actuator_lag");
+  EXPECT_EQ(spec.channels, (std::vector<std::string>{"omega_l", "omega_r"}));
+  ASSERT_TRUE(ParseEffectSpec("time_offset", &spec).ok());
+  EXPECT_TRUE(spec.channels.empty());
+  const Status bad = ParseEffectSpec("dead_band[v", &spec);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("dead_band[v"), std::string::npos) << bad.message();
+}
+
+TEST(Effect, ChannelListsGiveOneParameterPerChannel) {
+  const System shared = MakeSystem("diffdrive", {"actuator_lag"});
+  EXPECT_EQ(shared.num_params(), 3 + 1);  // one time constant for every channel
+  const System each = MakeSystem("diffdrive", {"actuator_lag[omega_l,omega_r]"});
+  EXPECT_EQ(each.num_params(), 3 + 2);
+  EXPECT_GE(each.ParamIndex("tau_s_omega_l"), 0);
+  const System asym = MakeSystem("diffdrive", {"asymmetric_gain[omega_r]"});
+  EXPECT_GE(asym.ParamIndex("asym_omega_r"), 0);
+  EXPECT_EQ(asym.ParamIndex("asym_omega_l"), -1);
+}
+
+TEST(Effect, StatusFormNamesTheProblemWithoutThrowing) {
+  std::unique_ptr<System> sys;
+  const Status s = MakeSystem("unicycle", {"backlash"}, {}, &sys);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("backlash"), std::string::npos) << s.message();
+  EXPECT_TRUE(MakeSystem("ackermann", {"backlash"}, {}, &sys).ok());
+  EXPECT_EQ(sys->num_params(), 3 + 1);
+}
+
+}  // namespace
+}  // namespace kincal

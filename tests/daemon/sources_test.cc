@@ -1,0 +1,116 @@
+// The frame sources and their factory: each source declares what it can do, the factory
+// picks the one the config names; the replay source hands over every frame and control of
+// a log in order; the simulated camera renders the robot; a device that cannot be opened
+// is a status naming it and errno's text.
+#include "daemon/sources.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "daemon/daemon_test_util.h"
+
+namespace kincal::daemon {
+namespace {
+
+using test_util::SimConfig;
+using test_util::TempPath;
+
+const std::string kGoldenLog = std::string(KINCAL_SOURCE_DIR) + "/tests/data/golden_replay.lcm";
+
+struct Counted {
+  int frames = 0, controls = 0;
+  int64_t last_utime = 0;
+  bool in_order = true;
+};
+
+// Reads a started source to its end (or `max_frames`).
+void Drain(FrameSource* s, Counted* c, int max_frames = 1 << 30) {
+  Frame f;
+  std::string error;
+  while (c->frames < max_frames) {
+    const SourceStatus st = s->Next(&f, 1000, &error);
+    if (st == SourceStatus::kEnd) break;
+    ASSERT_NE(st, SourceStatus::kError) << error;
+    if (st != SourceStatus::kFrame) continue;
+    c->in_order = c->in_order && f.utime > c->last_utime;
+    c->last_utime = f.utime;
+    ++c->frames;
+  }
+}
+
+TEST(Sources, ReplayOfALogIsLosslessAndCarriesItsControls) {
+  DaemonConfig c = LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) +
+                                    "/tests/data/kincald_golden.yaml");
+  c.source = SourceKind::kReplay;
+  c.replay.path = kGoldenLog;
+  c.replay.speed = 0;
+  Counted n;
+  auto src = MakeSource(c, LoadVisionSetup(c),
+                        [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr);
+  ASSERT_NE(src, nullptr);
+  const SourceCapabilities caps = src->capabilities();
+  EXPECT_TRUE(caps.lossless);
+  EXPECT_TRUE(caps.carries_controls);
+  EXPECT_TRUE(caps.controls_end_with_frames);
+  EXPECT_FALSE(caps.can_reopen);
+  ASSERT_TRUE(src->Start().ok());
+  Drain(src.get(), &n);
+  src->Stop();
+  EXPECT_EQ(n.frames, 151);  // 0 to 5 s at 30 fps, as recorded
+  EXPECT_GT(n.controls, 100);
+  EXPECT_TRUE(n.in_order);
+  EXPECT_EQ(src->rejected(), 0);
+}
+
+TEST(Sources, ReplayOfAMissingLogNamesIt) {
+  ReplayOptions r;
+  r.path = TempPath("no_such.lcm");
+  auto src = MakeReplaySource(r, LcmOptions{}, nullptr);
+  const Status s = src->Start();
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("no_such.lcm"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("No such file or directory"), std::string::npos) << s.message();
+  r.path = std::filesystem::temp_directory_path().string();
+  const Status dir = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
+  EXPECT_NE(dir.message().find("is a directory, expected an LCM log file"), std::string::npos)
+      << dir.message();
+  r.path = "/dev/zero";
+  const Status dev = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
+  EXPECT_NE(dev.message().find("is not a regular file"), std::string::npos) << dev.message();
+}
+
+TEST(Sources, SimulatedCameraRendersTheRobotAndPublishesItsControls) {
+  DaemonConfig c = SimConfig(2.0);
+  Counted n;
+  // The source keeps its own copy of the set-up: a temporary is fine.
+  auto src = MakeSource(c, LoadVisionSetup(c),
+                        [&n](const void*, size_t, int64_t) { ++n.controls; },
+                        [](const std::string&, const void*, size_t) {});
+  ASSERT_NE(src, nullptr);
+  EXPECT_TRUE(src->capabilities().carries_controls);
+  EXPECT_TRUE(src->capabilities().lossless);  // sim.speed 0
+  ASSERT_TRUE(src->Start().ok());
+  Drain(src.get(), &n);
+  src->Stop();
+  EXPECT_NEAR(n.frames, 2.0 * 30, 2);
+  EXPECT_GT(n.controls, 0);
+  EXPECT_TRUE(n.in_order);
+}
+
+TEST(Sources, V4l2DeviceThatIsNotThereIsAStatusWithErrno) {
+  DaemonConfig c = SimConfig(1.0);
+  c.source = SourceKind::kV4l2;
+  c.v4l2.device = "/dev/kincal-no-such-video";
+  auto src = MakeSource(c, LoadVisionSetup(c), nullptr, nullptr);
+  ASSERT_NE(src, nullptr);
+  EXPECT_TRUE(src->capabilities().can_reopen);
+  EXPECT_FALSE(src->capabilities().carries_controls);
+  const Status s = src->Start();
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("/dev/kincal-no-such-video"), std::string::npos) << s.message();
+  EXPECT_NE(s.message().find("No such file or directory"), std::string::npos) << s.message();
+}
+
+}  // namespace
+}  // namespace kincal::daemon

@@ -1,0 +1,156 @@
+// Recordings: CSV and MR.CLAM readers give errors naming the file, the line and what was
+// expected, count repeated times; kincald's LCM logs read back, damaged ones with warnings.
+#include <gtest/gtest.h>
+
+#include <kincal/controls_t.hpp>
+#include <kincal/pose_t.hpp>
+
+#include "io/io_test_util.h"
+#include "kincal/io/recording.h"
+
+namespace kincal {
+namespace {
+
+using testing::PutMessage;
+using testing::ThreeEventLog;
+class RecordingCsv : public testing::IoTest {};
+class RecordingLcmLog : public testing::IoTest {};
+
+const char* kPoses = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0,0\n";
+
+TEST_F(RecordingCsv, MissingColumnNamesFileLineAndExpectedHeader) {
+  const std::string e = Error("t,v\n0,1\n", kPoses);
+  EXPECT_NE(e.find("c.csv:1: header lacks column 'omega' (expected header 't,v,omega')"),
+            std::string::npos)
+      << e;
+}
+
+TEST_F(RecordingCsv, NonNumericValueNamesLineAndColumn) {
+  const std::string e = Error("t,v,omega\n0,1,0\n1,fast,0\n", kPoses);
+  EXPECT_NE(e.find("c.csv:3: column 'v': expected a finite number, got 'fast'"), std::string::npos)
+      << e;
+}
+
+TEST_F(RecordingCsv, TimeGoingBackwardsIsAnError) {
+  const std::string e = Error("t,v,omega\n0,1,0\n2,1,0\n1,1,0\n", kPoses);
+  EXPECT_NE(e.find("c.csv:4: time 1 goes backwards (previous row, line 3, has 2)"),
+            std::string::npos)
+      << e;
+}
+
+TEST_F(RecordingCsv, DisjointSpansAreAnError) {
+  const std::string e = Error("t,v,omega\n100,1,0\n101,1,0\n", kPoses);
+  EXPECT_NE(e.find("time spans do not overlap"), std::string::npos) << e;
+}
+
+TEST_F(RecordingCsv, EmptyFileAndWrongRowLength) {
+  EXPECT_NE(Error("", kPoses).find("c.csv: empty file (no header)"), std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n0,1\n", kPoses).find("c.csv:2: expected 3 values, found 2"),
+            std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n", kPoses).find("c.csv: no control rows"), std::string::npos);
+}
+
+TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
+  const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
+                                       Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),
+                                       *MakeModel("unicycle"));
+  EXPECT_EQ(r.stats.control_repeated_times, 1);
+  EXPECT_EQ(r.stats.pose_repeated_times, 1);
+  EXPECT_EQ(r.controls.At(0.5)[0], 2.0);  // v, the later of the repeated rows
+  EXPECT_EQ(r.controls.At(0.5)[1], 0.5);  // omega
+  EXPECT_EQ(r.poses.size(), 2u);
+  EXPECT_NEAR(r.poses[0].z.z(), 0.1, 1e-15);
+}
+
+TEST_F(RecordingCsv, HeadingInDegreesIsFlagged) {
+  const Recording r = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
+                                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"),
+                                       *MakeModel("unicycle"));
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos)
+      << r.warnings[0];
+}
+
+TEST_F(RecordingCsv, MrclamCommentsAndMissingFile) {
+  const std::string d = dir_.string();
+  Write("Robot1_Odometry.dat", "# comment\n10.0 0.1 0.0\n10.5 0.1 0.2\n");
+  Write("Robot1_Groundtruth.dat", "# comment\n10.0 1 2 0.5\n10.2 1.01 2 0.5\n");
+  const Recording r = ReadMrclam(d, 1);
+  EXPECT_EQ(r.stats.comment_lines, 2);
+  EXPECT_EQ(r.origin_s, 10.0);
+  EXPECT_EQ(r.controls.size(), 2u);
+  try {
+    ReadMrclam(d, 2);
+    FAIL();
+  } catch (const RecordingError& e) {
+    EXPECT_NE(std::string(e.what()).find("Robot2_Odometry.dat: cannot open"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(RecordingLcmLog, ReadsBack) {
+  const std::string path = (dir_ / "run.lcm").string();
+  {
+    lcm::LogFile log(path, "w");
+    ASSERT_TRUE(log.good());
+    for (int k = 0; k < 5; ++k) {
+      kincal::controls_t c{};
+      c.schema_version = 1;
+      c.utime = 1'000'000 + k * 100'000;
+      c.model = "unicycle";
+      c.num_controls = 2;
+      c.names = {"omega", "v"};
+      c.values = {0.1 * k, 0.5};
+      PutMessage(log, "KINCAL_CONTROLS", c, c.utime);
+      kincal::pose_t p{};
+      p.schema_version = 1;
+      p.utime = 1'000'000 + k * 100'000 + 50'000;
+      p.x = 0.05 * k;
+      p.valid = 1;
+      PutMessage(log, "KINCAL_POSE", p, p.utime);
+    }
+  }
+  const Recording r = ReadLcmLog(path, *MakeModel("unicycle"));
+  EXPECT_EQ(r.controls.size(), 5u);
+  EXPECT_EQ(r.poses.size(), 5u);
+  EXPECT_DOUBLE_EQ(r.origin_s, 1.0);
+  EXPECT_EQ(r.controls.At(0.45)[0], 0.5);           // v, mapped by name
+  EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);  // omega
+  EXPECT_NEAR(r.poses[2].z.x(), 0.1, 1e-12);
+  EXPECT_THROW(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle")), RecordingError);
+}
+
+TEST_F(RecordingLcmLog, DamagedIsReadWithWarnings) {
+  // ReadLcmLog keeps the good events and reports the damage as warnings.
+  const std::string path = (dir_ / "run.lcm").string();
+  {
+    lcm::LogFile log(path, "w");
+    for (int k = 0; k < 4; ++k) {
+      kincal::controls_t c{};
+      c.schema_version = 1;
+      c.utime = 1'000'000 + k * 100'000;
+      c.model = "unicycle";
+      c.num_controls = 2;
+      c.names = {"v", "omega"};
+      c.values = {0.5, 0.1};
+      kincal::pose_t p{};
+      p.schema_version = 1;
+      p.utime = c.utime + 50'000;
+      p.valid = 1;
+      PutMessage(log, "KINCAL_CONTROLS", c, c.utime);
+      PutMessage(log, "KINCAL_POSE", p, c.utime);
+    }
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string b(std::istreambuf_iterator<char>(in), {});
+  in.close();
+  Write("run.lcm", b.substr(0, b.size() - 5));  // the last pose cut short
+  const Recording r = ReadLcmLog(path, *MakeModel("unicycle"));
+  EXPECT_EQ(r.controls.size(), 4u);
+  EXPECT_EQ(r.poses.size(), 3u);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("cut short"), std::string::npos) << r.warnings[0];
+}
+
+}  // namespace
+}  // namespace kincal

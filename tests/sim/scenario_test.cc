@@ -1,0 +1,55 @@
+// Scenario files: the shipped examples load into the typed struct; a bad key or value is
+// named with file and line; parameters by name over the model's defaults.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include "kincal/scenario.h"
+
+namespace kincal {
+namespace {
+
+std::string Source(const std::string& rel) { return std::string(KINCAL_SOURCE_DIR) + "/" + rel; }
+
+std::string LoadError(const std::string& path) {
+  try {
+    LoadScenario(path);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+TEST(Scenario, ShippedExampleLoads) {
+  const Scenario s = LoadScenario(Source("config/sim_diffdrive.yaml"));
+  EXPECT_EQ(s.model, "diffdrive");
+  EXPECT_GT(s.duration_s, 0.0);
+  EXPECT_GT(s.camera.rate_hz, 0.0);
+  EXPECT_FALSE(s.truth.empty());
+}
+
+TEST(Scenario, UnknownKeyIsNamedWithFileAndLine) {
+  const std::string e = LoadError(Source("tests/data/bad_scenario.yaml"));
+  EXPECT_NE(e.find("bad_scenario.yaml:3: unknown key 'wheel_radius'"), std::string::npos) << e;
+}
+
+TEST(Scenario, NegativeDurationIsRejected) {
+  const auto path = std::filesystem::temp_directory_path() / "kincal_scenario_duration.yaml";
+  std::ofstream(path) << "model: unicycle\nduration_s: -5\n";
+  const std::string e = LoadError(path.string());
+  std::filesystem::remove(path);
+  EXPECT_NE(e.find("duration_s"), std::string::npos) << e;
+}
+
+TEST(Scenario, ParamsByNameOverTheModelsDefaults) {
+  const System sys = MakeSystem("diffdrive");
+  const VecN<kMaxState> p = ParamsFrom(sys, {{"d", 0.2}}, "truth");
+  EXPECT_EQ(p[2], 0.2);
+  EXPECT_EQ(p[0], sys.params()[0].default_value);
+  EXPECT_THROW(ParamsFrom(sys, {{"wheel", 1.0}}, "truth"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace kincal
