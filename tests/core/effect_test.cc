@@ -1,9 +1,10 @@
 // Effect specs: parsing, binding to a model's channels, and the errors for bad ones.
+#include "kincal/effect.h"
+
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 
-#include "kincal/effect.h"
 #include "kincal/system.h"
 
 namespace kincal {

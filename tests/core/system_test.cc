@@ -1,6 +1,8 @@
 // System (a model with its effects): autodiff derivatives of the propagation and the
 // measurement against finite differences for every registered model with every effect,
 // and the exact arc integration against fine Euler.
+#include "kincal/system.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,7 +10,6 @@
 
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/model.h"
-#include "kincal/system.h"
 #include "test_util.h"
 
 namespace kincal {

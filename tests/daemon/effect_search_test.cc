@@ -21,8 +21,7 @@ AnalyzeOptions SearchOptions() {
 
 TEST(EffectSearch, FindsAHiddenDelayAndReportsTheGain) {
   EffectSearch search;
-  const Recording rec =
-      testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
+  const Recording rec = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
   ASSERT_TRUE(search.Start(rec, SearchOptions()));
   EXPECT_FALSE(search.Start(rec, SearchOptions()));  // one at a time
   const EffectSearchResult r = search.Wait();

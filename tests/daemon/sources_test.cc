@@ -40,14 +40,14 @@ void Drain(FrameSource* s, Counted* c, int max_frames = 1 << 30) {
 }
 
 TEST(Sources, ReplayOfALogIsLosslessAndCarriesItsControls) {
-  DaemonConfig c = LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) +
-                                    "/tests/data/kincald_golden.yaml");
+  DaemonConfig c =
+      LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/tests/data/kincald_golden.yaml");
   c.source = SourceKind::kReplay;
   c.replay.path = kGoldenLog;
   c.replay.speed = 0;
   Counted n;
-  auto src = MakeSource(c, LoadVisionSetup(c),
-                        [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr);
+  auto src = MakeSource(
+      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr);
   ASSERT_NE(src, nullptr);
   const SourceCapabilities caps = src->capabilities();
   EXPECT_TRUE(caps.lossless);
@@ -84,9 +84,9 @@ TEST(Sources, SimulatedCameraRendersTheRobotAndPublishesItsControls) {
   DaemonConfig c = SimConfig(2.0);
   Counted n;
   // The source keeps its own copy of the set-up: a temporary is fine.
-  auto src = MakeSource(c, LoadVisionSetup(c),
-                        [&n](const void*, size_t, int64_t) { ++n.controls; },
-                        [](const std::string&, const void*, size_t) {});
+  auto src = MakeSource(
+      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; },
+      [](const std::string&, const void*, size_t) {});
   ASSERT_NE(src, nullptr);
   EXPECT_TRUE(src->capabilities().carries_controls);
   EXPECT_TRUE(src->capabilities().lossless);  // sim.speed 0

@@ -1,10 +1,10 @@
 // PoseNoiseAdapter: adds process noise equal to what the innovations show beyond the
 // filter's prediction, and nothing when the model fits.
+#include "kincal/estimation/noise_adaptation.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
-
-#include "kincal/estimation/noise_adaptation.h"
 
 namespace kincal {
 namespace {

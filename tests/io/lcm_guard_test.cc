@@ -1,6 +1,8 @@
 // Checks on raw LCM messages: real messages pass, length fields that claim more than the
 // bytes received (or more than kincal's limits) are rejected with a reason, before
 // lcm-gen's decoder could allocate for them.
+#include "kincal/io/lcm_guard.h"
+
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -8,8 +10,6 @@
 #include <kincal/frame_t.hpp>
 #include <kincal/params_t.hpp>
 #include <vector>
-
-#include "kincal/io/lcm_guard.h"
 
 namespace kincal {
 namespace {
@@ -37,7 +37,8 @@ controls_t Controls(int n) {
 size_t NumControlsOffset(const controls_t& m) { return 8 + 4 + 8 + 8 + 4 + m.model.size() + 1; }
 
 void PutInt32(std::vector<uint8_t>* buf, size_t at, int32_t v) {
-  for (int k = 0; k < 4; ++k) (*buf)[at + static_cast<size_t>(k)] = uint8_t(uint32_t(v) >> (24 - 8 * k));
+  for (int k = 0; k < 4; ++k)
+    (*buf)[at + static_cast<size_t>(k)] = uint8_t(uint32_t(v) >> (24 - 8 * k));
 }
 
 TEST(LcmGuard, RealControlsPassAndHostileCountsAreRejected) {

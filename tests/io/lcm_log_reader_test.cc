@@ -1,11 +1,12 @@
 // The bounded LCM log reader: reads what liblcm writes, names a cut-short last event and
 // skips damage, saying at which byte offset.
+#include "kincal/io/lcm_log_reader.h"
+
 #include <gtest/gtest.h>
 
 #include <kincal/controls_t.hpp>
 #include <kincal/pose_t.hpp>
 
-#include "kincal/io/lcm_log_reader.h"
 #include "io/io_test_util.h"
 #include "kincal/io/recording.h"
 

@@ -1,12 +1,13 @@
 // Recordings: CSV and MR.CLAM readers give errors naming the file, the line and what was
 // expected, count repeated times; kincald's LCM logs read back, damaged ones with warnings.
+#include "kincal/io/recording.h"
+
 #include <gtest/gtest.h>
 
 #include <kincal/controls_t.hpp>
 #include <kincal/pose_t.hpp>
 
 #include "io/io_test_util.h"
-#include "kincal/io/recording.h"
 
 namespace kincal {
 namespace {

@@ -1,12 +1,12 @@
 // Scenario files: the shipped examples load into the typed struct; a bad key or value is
 // named with file and line; parameters by name over the model's defaults.
+#include "kincal/scenario.h"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
-
-#include "kincal/scenario.h"
 
 namespace kincal {
 namespace {

@@ -1,12 +1,12 @@
 // Simulator: frame timing statistics, command profiles, and truth integrated by the
 // System; measurements scatter with the configured covariance.
+#include "kincal/simulator.h"
+
 #include <gtest/gtest.h>
 
 #include <array>
 #include <cmath>
 #include <random>
-
-#include "kincal/simulator.h"
 
 namespace kincal {
 namespace {

@@ -1,11 +1,12 @@
 // Targets and the synthetic camera: the thesis layout is valid and asymmetric, bad layouts
 // are named, and a rendered target's ground-truth centres are the camera's projections
 // with the markers where they were drawn.
+#include "kincal/vision/target.h"
+
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "kincal/vision/target.h"
 #include "vision/vision_test_util.h"
 
 namespace kincal::vision {
