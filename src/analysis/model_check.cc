@@ -17,6 +17,14 @@ const ModelCheck::OnlineTerm ModelCheck::kOnlineTerms[ModelCheck::kNumOnlineTerm
     {{ResidualComponent::kCross, Regressor::kTurnRate}, "cross-track innovation vs turn rate"},
     {{ResidualComponent::kAlong, Regressor::kTurnRate}, "along-track innovation vs turn rate"},
     {{ResidualComponent::kAlong, Regressor::kAbsTurnRate}, "along-track innovation vs |turn rate|"},
+    {{ResidualComponent::kAlong, Regressor::kAbsSpeed},
+     "along-track innovation vs |speed| beyond a gain (sign-dependent speed gain)"},
+    {{ResidualComponent::kHeading, Regressor::kAbsTurnRate},
+     "heading innovation vs |turn rate| beyond a gain (sign-dependent turn gain)"},
+    {{ResidualComponent::kCross, Regressor::kLatAccel},
+     "cross-track innovation vs speed x turn rate beyond the turn rate (sideways slip)"},
+    {{ResidualComponent::kHeading, Regressor::kTurnRateSq},
+     "heading innovation vs turn rate x |turn rate| beyond a gain (turn-rate dependent track)"},
 };
 
 bool ModelCheckOptions::IsValid(std::string* error) const {
@@ -80,7 +88,11 @@ void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& st
                                      now.omega,
                                      std::abs(now.omega),
                                      (std::abs(now.vx) + std::abs(now.omega)) > 1e-9 ? 1.0 : 0.0,
-                                     std::min(update.nis, kClipSigmas * kClipSigmas)};
+                                     std::min(update.nis, kClipSigmas * kClipSigmas),
+                                     now.vx,
+                                     std::abs(now.vx),
+                                     now.vx * now.omega,
+                                     now.omega * std::abs(now.omega)};
   for (int k = 0; k < kNumSeries; ++k)
     data_[static_cast<size_t>(k)][static_cast<size_t>(next_)] = values[k];
   next_ = (next_ + 1) % kWindow;
@@ -114,6 +126,14 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) * std::sqrt(static_cast<double>(n))
                                 : 0.0;
   };
+  // Partial correlation of y and x with `control`'s linear part removed from both, as a z.
+  auto partial_z = [&](Series y, Series x, Series control) {
+    const double n_sqrt = std::sqrt(static_cast<double>(n));
+    const double rxy = corr_z(y, x) / n_sqrt, rxc = corr_z(x, control) / n_sqrt,
+                 ryc = corr_z(y, control) / n_sqrt;
+    const double d = (1.0 - rxc * rxc) * (1.0 - ryc * ryc);
+    return d > 1e-9 ? (rxy - rxc * ryc) / std::sqrt(d) * n_sqrt : 0.0;
+  };
   v.nis_mean = mean(kNis);
   if (count_ < options_.min_samples) {
     v.evidence =
@@ -140,9 +160,16 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     bias_z = hs > 0 ? hm / (hs / std::sqrt(static_cast<double>(moving))) : 0.0;
   }
   // The z of every term this check measures, in kOnlineTerms' order.
-  const double term_z[kNumOnlineTerms] = {
-      corr_z(kAlong, kDv), corr_z(kHeading, kDw), bias_z,
-      corr_z(kCross, kW),  corr_z(kAlong, kW),    corr_z(kAlong, kAbsW)};
+  const double term_z[kNumOnlineTerms] = {corr_z(kAlong, kDv),
+                                          corr_z(kHeading, kDw),
+                                          bias_z,
+                                          corr_z(kCross, kW),
+                                          corr_z(kAlong, kW),
+                                          corr_z(kAlong, kAbsW),
+                                          partial_z(kAlong, kAbsV, kV),
+                                          partial_z(kHeading, kAbsW, kW),
+                                          partial_z(kCross, kLatAcc, kW),
+                                          partial_z(kHeading, kWSq, kW)};
   const Suspect* best = nullptr;
   double best_z = 0.0;
   for (const auto& c : suspects_) {

@@ -5,10 +5,12 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <functional>
 #include <kincal/health_t.hpp>
 #include <kincal/model_check_t.hpp>
 #include <kincal/params_t.hpp>
 #include <map>
+#include <set>
 
 #include "daemon/daemon_test_util.h"
 #include "kincal/daemon/daemon.h"
@@ -29,21 +31,28 @@ struct Replayed {
   DaemonCounters counters;
 };
 
-Replayed SimulateAndReplay(const std::string& name, const std::string& hidden_yaml,
-                           double duration_s, bool auto_effects = false, int replays = 1) {
-  const std::string scenario = TempPath(name + "_scenario.yaml");
-  {
-    std::ifstream in(test_util::kConfigDir + "/sim_daemon.yaml");
-    std::ofstream out(scenario);
-    std::string line;
-    while (std::getline(in, line)) {
-      if (line.rfind("hidden_effects:", 0) == 0) continue;
-      out << line << "\n";
-      if (line.rfind("truth:", 0) == 0) out << hidden_yaml.substr(0, hidden_yaml.find('|')) << "\n";
-    }
-    out << hidden_yaml.substr(hidden_yaml.find('|') + 1) << "\n";
+// The shipped diff-drive scenario with extra truth lines and a hidden_effects line
+// ("  tau_s: 0.15|hidden_effects: [actuator_lag]").
+std::string DiffDriveScenario(const std::string& hidden_yaml) {
+  std::ifstream in(test_util::kConfigDir + "/sim_daemon.yaml");
+  std::string text, line;
+  while (std::getline(in, line)) {
+    if (line.rfind("hidden_effects:", 0) == 0) continue;
+    text += line + "\n";
+    if (line.rfind("truth:", 0) == 0) text += hidden_yaml.substr(0, hidden_yaml.find('|')) + "\n";
   }
+  return text + hidden_yaml.substr(hidden_yaml.find('|') + 1) + "\n";
+}
+
+// Records the simulated robot of `scenario_yaml` through the camera, then replays the log
+// `replays` times with --fast. `robot` adjusts the robot section (model, guess).
+Replayed SimulateAndReplayScenario(const std::string& name, const std::string& scenario_yaml,
+                                   double duration_s, bool auto_effects, int replays,
+                                   const std::function<void(DaemonConfig*)>& robot) {
+  const std::string scenario = TempPath(name + "_scenario.yaml");
+  std::ofstream(scenario) << scenario_yaml;
   DaemonConfig sim = test_util::SimConfig(duration_s);
+  if (robot) robot(&sim);
   sim.sim.scenario = scenario;
   sim.record.path = TempPath(name + "_sim.lcm");
   {
@@ -91,6 +100,12 @@ Replayed SimulateAndReplay(const std::string& name, const std::string& hidden_ya
   return r;
 }
 
+Replayed SimulateAndReplay(const std::string& name, const std::string& hidden_yaml,
+                           double duration_s, bool auto_effects = false, int replays = 1) {
+  return SimulateAndReplayScenario(name, DiffDriveScenario(hidden_yaml), duration_s, auto_effects,
+                                   replays, nullptr);
+}
+
 // Health reports the status of the params_t published last, at every message.
 void ExpectHealthAgreesWithParams(const Replayed& r) {
   int last_status = kincal::params_t::STATUS_INITIALIZING;
@@ -130,6 +145,19 @@ TEST(DaemonModelError, HiddenLagThroughTheCameraAndReplay) {
   ExpectHealthAgreesWithParams(r);
 }
 
+TEST(DaemonModelError, HiddenDelayThroughTheCameraAndReplay) {
+  const Replayed r =
+      SimulateAndReplay("delay", "  delay_s: 0.10|hidden_effects: [time_offset]", 60);
+  ASSERT_GT(r.params.size(), 100u);
+  EXPECT_LE(r.counters.filter_resets, 1);
+  EXPECT_LT(r.counters.poses_gated, r.counters.updates / 20);
+  const double named_s = SecondsUntilNamed(r, "time_offset");
+  EXPECT_GE(named_s, 0.0);
+  EXPECT_LE(named_s, 30.0);
+  EXPECT_EQ(int{r.params.back().status}, int{kincal::params_t::STATUS_MODEL_INADEQUATE});
+  ExpectHealthAgreesWithParams(r);
+}
+
 TEST(DaemonModelError, CleanRobotConvergesAndHealthAgrees) {
   const Replayed r = SimulateAndReplay("clean", "|hidden_effects: []", 40);
   ASSERT_GT(r.params.size(), 100u);
@@ -157,6 +185,42 @@ TEST(DaemonModelError, AutoEffectsFindTheLagAndReplayBitIdentically) {
     EXPECT_NEAR(p.values[i], truth.at(p.names[i]), 3 * p.sigmas[i]) << p.names[i];
   }
   EXPECT_NEAR(p.values[3], 0.15, 0.015);
+  EXPECT_LE(r.counters.filter_resets, 1);
+  ExpectHealthAgreesWithParams(r);
+}
+
+// The MR.CLAM pattern through the camera: a unicycle that acts 0.2 s late and loses speed
+// in turns, nothing declared, robot.effects: auto. Both effects are found and estimated.
+TEST(DaemonModelError, AutoEffectsFindTheDelayAndTheTurnSlowdownOfAUnicycle) {
+  const std::string scenario = R"(model: unicycle
+truth: {k_v: 0.9, k_omega: 0.85, delay_s: 0.2, c_slow: 0.3}
+hidden_effects: [time_offset, turn_slowdown]
+estimator_effects: []
+duration_s: 240
+seed: 8
+controls: {profile: piecewise, low: [-0.1, -1.0], high: [0.3, 1.0], min_period_s: 1.0, rate_hz: 50}
+camera: {rate_hz: 30, jitter_max_s: 0.0, jitter_prob: 0.0, dropout_prob: 0.0}
+)";
+  const Replayed r = SimulateAndReplayScenario("mrclam_auto", scenario, 240, /*auto_effects=*/true,
+                                               1, [](DaemonConfig* c) {
+                                                 c->robot.model = "unicycle";
+                                                 c->robot.guess = {{"k_v", 1.0}, {"k_omega", 1.0}};
+                                                 c->filter.control_psd = {0.0, 0.0};
+                                               });
+  ASSERT_FALSE(r.checks.empty());
+  const auto& last = r.checks.back();
+  std::set<std::string> added(last.effects_added.begin(), last.effects_added.end());
+  EXPECT_EQ(added, (std::set<std::string>{"time_offset", "turn_slowdown"})) << last.evidence;
+  const std::map<std::string, double> truth = {
+      {"k_v", 0.9}, {"k_omega", 0.85}, {"delay_s", 0.2}, {"c_slow", 0.3}};
+  const auto& p = r.params.back();
+  ASSERT_EQ(p.num_params, 4);
+  for (int i = 0; i < p.num_params; ++i) {
+    EXPECT_NEAR(p.values[i], truth.at(p.names[i]), 3 * p.sigmas[i]) << p.names[i];
+    if (p.names[i] == "delay_s" || p.names[i] == "c_slow") {
+      EXPECT_NEAR(p.values[i], truth.at(p.names[i]), 0.1 * truth.at(p.names[i])) << p.names[i];
+    }
+  }
   EXPECT_LE(r.counters.filter_resets, 1);
   ExpectHealthAgreesWithParams(r);
 }

@@ -211,6 +211,23 @@ TEST(FilterStageOnlineOffline, DeclaredEffectsAgreeWithAnalyze) {
   EXPECT_LE(run.counters.filter_resets, 1);
 }
 
+// Nothing declared, nothing added: the bare model's online estimate agrees with the offline
+// bare fit of the same motion within 10 % (both are biased by the same missing effects).
+TEST(FilterStageOnlineOffline, BareModelAgreesWithTheOfflineBareFit) {
+  StageScenario sc = MrclamLike();
+  const auto run = RunStage(sc, DefaultStageOptions());
+  AnalyzeOptions o;
+  o.model = sc.model;
+  o.effects_mode = "none";
+  const AnalyzeResult offline = Analyze(test_util::ToRecording(test_util::Simulate(sc), 2), o);
+  for (const auto& e : offline.before.params) {
+    EXPECT_NEAR(run.Final(e.name), e.value, 0.1 * std::abs(e.value))
+        << e.name << ": online " << run.Final(e.name) << ", offline bare fit " << e.value;
+  }
+  EXPECT_LE(run.counters.filter_resets, 1);
+  EXPECT_NE(int{run.params.back().status}, int{kincal::params_t::STATUS_CONVERGED});
+}
+
 TEST(FilterStageOnlineOffline, AutoFindsTheDelayAndTheTurnSlowdown) {
   StageScenario sc = MrclamLike();
   sc.auto_effects = true;

@@ -64,14 +64,31 @@ class ModelCheck {
   }
 
  private:
-  enum Series { kAlong, kCross, kHeading, kDv, kDw, kW, kAbsW, kMoving, kNis, kNumSeries };
+  enum Series {
+    kAlong,
+    kCross,
+    kHeading,
+    kDv,
+    kDw,
+    kW,
+    kAbsW,
+    kMoving,
+    kNis,
+    kV,
+    kAbsV,
+    kLatAcc,
+    kWSq,
+    kNumSeries
+  };
   // The signature terms measured online (the command change over the lookback stands for
-  // accel and yaw_accel; the current turn rate for turn_rate).
+  // accel and yaw_accel; the current turn rate for turn_rate). Terms whose regressor is a
+  // nonlinear function of the speed or turn rate are measured by partial correlation, with
+  // the linear part removed: the filter's own gains explain that part while they converge.
   struct OnlineTerm {
     SignatureTerm term;
     const char* what;
   };
-  static constexpr int kNumOnlineTerms = 6;
+  static constexpr int kNumOnlineTerms = 10;
   static const OnlineTerm kOnlineTerms[kNumOnlineTerms];
   // An effect whose signature has a measured term.
   struct Suspect {
