@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <Eigen/Cholesky>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -13,6 +14,8 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+
+#include "kincal/system.h"
 
 namespace kincal::daemon {
 
@@ -75,6 +78,68 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
   }
 }
 
+namespace {
+
+std::string FormatNumber(double v) {
+  std::ostringstream o;
+  o << std::setprecision(6) << v;
+  return o.str();
+}
+
+// A parameter's plausible magnitude: its generic guess or the spread of that guess.
+double Scale(const ParamInfo& p) { return std::max(std::abs(p.default_value), p.default_sigma); }
+
+}  // namespace
+
+bool CheckpointIsValid(const Checkpoint& c, std::string* error) {
+  std::unique_ptr<System> sys;
+  if (const Status s = MakeSystem(c.model, c.effects, {}, &sys); !s.ok()) {
+    *error = "model and effects: " + s.message();
+    return false;
+  }
+  const size_t n = static_cast<size_t>(sys->num_params());
+  if (c.names.size() != n || c.values.size() != n || c.covariance.rows() != static_cast<int>(n) ||
+      c.covariance.cols() != static_cast<int>(n)) {
+    *error = "expected the " + std::to_string(n) + " parameters of model '" + c.model +
+             "' with its effects, found " + std::to_string(c.names.size());
+    return false;
+  }
+  for (size_t i = 0; i < n; ++i) {
+    const ParamInfo& p = sys->params()[i];
+    const int k = static_cast<int>(i);
+    if (c.names[i] != p.name) {
+      *error = "parameter " + std::to_string(i + 1) + " is '" + c.names[i] + "', expected '" +
+               p.name + "'";
+      return false;
+    }
+    const double limit = kCheckpointMaxScale * Scale(p);
+    if (!std::isfinite(c.values[i]) || std::abs(c.values[i]) > limit || c.values[i] < p.min_value) {
+      *error = "value of '" + p.name + "' (" + FormatNumber(c.values[i]) + " " + p.unit +
+               ") is not plausible: expected a finite value within +-" + FormatNumber(limit) +
+               (std::isfinite(p.min_value) ? " and >= " + FormatNumber(p.min_value) : "");
+      return false;
+    }
+    const double var = c.covariance(k, k);
+    const double min_sigma = kCheckpointMinSigmaFraction * p.default_sigma;
+    if (!(var >= min_sigma * min_sigma) || !(std::sqrt(var) <= limit)) {
+      *error = "variance of '" + p.name + "' (" + FormatNumber(var) +
+               ") is not plausible: expected a sigma between " + FormatNumber(min_sigma) + " and " +
+               FormatNumber(limit) + " " + p.unit;
+      return false;
+    }
+  }
+  const double asym = (c.covariance - c.covariance.transpose()).cwiseAbs().maxCoeff();
+  if (!(asym <= 1e-9 * c.covariance.diagonal().cwiseAbs().maxCoeff())) {
+    *error = "covariance is not symmetric";
+    return false;
+  }
+  if (Eigen::LLT<Eigen::MatrixXd>(c.covariance).info() != Eigen::Success) {
+    *error = "covariance is not positive definite";
+    return false;
+  }
+  return true;
+}
+
 Checkpoint ReadCheckpoint(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path + ": cannot open checkpoint");
@@ -113,6 +178,8 @@ Checkpoint ReadCheckpoint(const std::string& path) {
         throw std::runtime_error("value of '" + c.names[i] + "' is not finite");
     }
     if (!c.covariance.allFinite()) throw std::runtime_error("covariance is not finite");
+    std::string invalid;
+    if (!CheckpointIsValid(c, &invalid)) throw std::runtime_error(invalid);
   } catch (const nlohmann::json::exception& e) {
     throw std::runtime_error(path + ": " + e.what());
   } catch (const std::runtime_error& e) {

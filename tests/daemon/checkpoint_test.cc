@@ -20,6 +20,71 @@ namespace {
 
 using namespace test_util;
 
+Checkpoint Good() {
+  Checkpoint c;
+  c.model = "diffdrive";
+  c.filter = "dd2";
+  c.names = {"r_l", "r_r", "d"};
+  c.units = {"m", "m", "m"};
+  c.values = {0.031, 0.0313, 0.148};
+  c.covariance = Eigen::Matrix3d::Identity() * 1e-8;
+  return c;
+}
+
+// Why a checkpoint is refused (empty: accepted).
+std::string Refusal(const Checkpoint& c) {
+  std::string error;
+  return CheckpointIsValid(c, &error) ? "" : error;
+}
+
+TEST(Checkpoint, ImplausibleValuesAndCovariancesAreRefusedByName) {
+  EXPECT_EQ(Refusal(Good()), "");
+  Checkpoint c = Good();
+  c.values[0] = 1e308;  // crashed the divergence re-fit
+  EXPECT_NE(Refusal(c).find("value of 'r_l' (1e+308 m) is not plausible"), std::string::npos)
+      << Refusal(c);
+  c = Good();
+  c.values[2] = 2e13;
+  EXPECT_NE(Refusal(c).find("value of 'd'"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.values[1] = -0.03;  // a radius below its bound
+  EXPECT_NE(Refusal(c).find(">= "), std::string::npos) << Refusal(c);
+  c = Good();
+  c.covariance(1, 1) = -1e-8;
+  EXPECT_NE(Refusal(c).find("variance of 'r_r'"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.covariance(2, 2) = 0.0;
+  EXPECT_NE(Refusal(c).find("variance of 'd'"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.covariance(0, 0) = 3.6e-17;  // sigma 6e-9 m: the filter would never move
+  EXPECT_NE(Refusal(c).find("variance of 'r_l'"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.covariance(0, 1) = 1e-8;  // not symmetric
+  EXPECT_NE(Refusal(c).find("not symmetric"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.covariance(0, 1) = c.covariance(1, 0) = 2e-8;  // |correlation| > 1
+  EXPECT_NE(Refusal(c).find("not positive definite"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.model = "bogus";
+  EXPECT_NE(Refusal(c).find("bogus"), std::string::npos) << Refusal(c);
+  c = Good();
+  c.names[2] = "wheelbase";
+  EXPECT_NE(Refusal(c).find("is 'wheelbase', expected 'd'"), std::string::npos) << Refusal(c);
+}
+
+TEST(Checkpoint, ReadRefusesAnImplausibleFileNamingIt) {
+  Checkpoint c = Good();
+  c.values[0] = 1e200;
+  const std::string path = TempPath("ck_big.json");
+  WriteCheckpoint(path, c);
+  try {
+    ReadCheckpoint(path);
+    FAIL() << "accepted r_l = 1e200";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": value of 'r_l'"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
   Checkpoint c;
   c.model = "diffdrive";

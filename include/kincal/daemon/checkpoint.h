@@ -32,9 +32,19 @@ struct Checkpoint {
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c);
 
+// A checkpoint to resume from or export must describe a real estimate: a known model with
+// its effects, every parameter of it in order, values finite, above the parameter's lower
+// bound and within kCheckpointMaxScale of its plausible magnitude (the larger of its
+// generic guess and that guess's sigma), each sigma at least kCheckpointMinSigmaFraction
+// of the guess's sigma (a smaller one freezes the filter), and the covariance symmetric
+// positive definite. False with a message naming the parameter and what was expected.
+inline constexpr double kCheckpointMaxScale = 1e3;
+inline constexpr double kCheckpointMinSigmaFraction = 1e-5;
+bool CheckpointIsValid(const Checkpoint& c, std::string* error);
+
 // Throws std::runtime_error naming the path on I/O failure.
 void WriteCheckpoint(const std::string& path, const Checkpoint& c);
-// Throws std::runtime_error naming the path and what is wrong.
+// Throws std::runtime_error naming the path and what is wrong (CheckpointIsValid too).
 Checkpoint ReadCheckpoint(const std::string& path);
 // YAML: model, effects, parameters {name: {value, sigma, unit}}, and the covariance.
 void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source);
