@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -18,6 +19,46 @@
 #include "kincal/system.h"
 
 namespace kincal::daemon {
+
+// Writes `text` to path through path.tmp (created exclusively, never through a link),
+// fsynced, then renamed over path; on any failure the temporary is removed and the status
+// names the file, the step and errno's text.
+Status WriteFileAtomically(const std::string& path, const std::string& text, const char* what) {
+  const std::string tmp = path + ".tmp";
+  ::unlink(tmp.c_str());  // a stale temporary (or a link planted there): removed, not followed
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    return Status::Error(tmp + ": cannot create the " + what + ": " + std::strerror(errno));
+  }
+  auto fail = [&](const std::string& step) {
+    const int err = errno;
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    return Status::Error(tmp + ": cannot " + step + " the " + what + ": " + std::strerror(err));
+  };
+  size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      if (n == 0) errno = EIO;
+      return fail("write");
+    }
+    done += static_cast<size_t>(n);
+  }
+  if (::fsync(fd) != 0) return fail("sync");
+  if (::close(fd) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    return Status::Error(tmp + ": cannot close the " + what + ": " + std::strerror(err));
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
+    ::unlink(tmp.c_str());
+    return Status::Error(path + ": cannot replace the " + what + ": " + std::strerror(err));
+  }
+  return {};
+}
 
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c) {
@@ -38,7 +79,11 @@ void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& e
   }
 }
 
-void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
+Status WriteCheckpoint(const std::string& path, const Checkpoint& c) {
+  if (!std::all_of(c.values.begin(), c.values.end(), [](double v) { return std::isfinite(v); }) ||
+      !c.covariance.allFinite()) {
+    return Status::Error(path + ": checkpoint not written: the estimate is not finite");
+  }
   nlohmann::json j;
   j["format"] = "kincal-checkpoint";
   j["version"] = 1;
@@ -56,26 +101,7 @@ void WriteCheckpoint(const std::string& path, const Checkpoint& c) {
       cov[static_cast<size_t>(i)].push_back(c.covariance(i, k));
   }
   j["covariance"] = cov;
-  const std::string text = j.dump(1);
-  const std::string tmp = path + ".tmp";
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) throw std::runtime_error(tmp + ": cannot write checkpoint: " + std::strerror(errno));
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      const int err = errno;
-      ::close(fd);
-      throw std::runtime_error(tmp + ": cannot write checkpoint: " + std::strerror(err));
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0 || ::close(fd) != 0)
-    throw std::runtime_error(tmp + ": cannot sync checkpoint");
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    throw std::runtime_error(path + ": cannot replace checkpoint: " + std::strerror(errno));
-  }
+  return WriteFileAtomically(path, j.dump(1), "checkpoint");
 }
 
 namespace {

@@ -76,7 +76,7 @@ TEST(Checkpoint, ReadRefusesAnImplausibleFileNamingIt) {
   Checkpoint c = Good();
   c.values[0] = 1e200;
   const std::string path = TempPath("ck_big.json");
-  WriteCheckpoint(path, c);
+  ASSERT_TRUE(WriteCheckpoint(path, c).ok());
   try {
     ReadCheckpoint(path);
     FAIL() << "accepted r_l = 1e200";
@@ -97,7 +97,7 @@ TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
   c.covariance = Eigen::Matrix3d::Identity() * 1e-8;
   c.covariance(0, 1) = c.covariance(1, 0) = 3e-9;
   const std::string path = TempPath("ck.json");
-  WriteCheckpoint(path, c);
+  ASSERT_TRUE(WriteCheckpoint(path, c).ok());
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
   const Checkpoint r = ReadCheckpoint(path);
   EXPECT_EQ(r.names, c.names);
@@ -110,6 +110,30 @@ TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
       << yaml.str();
   std::ofstream(path) << "{\"format\": \"kincal-checkpoint\", \"version\": 1, \"model\": 3}";
   EXPECT_THROW(ReadCheckpoint(path), std::runtime_error);
+}
+
+TEST(Checkpoint, WritesNeverFollowALinkAndLeaveNoTemporaryOnFailure) {
+  const std::string victim = TempPath("victim.txt");
+  std::ofstream(victim) << "precious";
+  const std::string path = TempPath("ck_link.json");
+  std::filesystem::remove(path + ".tmp");
+  std::filesystem::create_symlink(victim, path + ".tmp");  // planted where the temporary goes
+  ASSERT_TRUE(WriteCheckpoint(path, Good()).ok());
+  std::ifstream in(victim);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "precious");
+  EXPECT_EQ(ReadCheckpoint(path).values, Good().values);
+  // A folder that does not exist: a status naming the file and errno's text.
+  const Status missing = WriteCheckpoint(TempPath("no_such_dir") + "/ck.json", Good());
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.message().find("No such file or directory"), std::string::npos)
+      << missing.message();
+  // Not finite: nothing written, nothing left behind.
+  Checkpoint nan = Good();
+  nan.values[0] = std::nan("");
+  const std::string nan_path = TempPath("ck_nan.json");
+  EXPECT_FALSE(WriteCheckpoint(nan_path, nan).ok());
+  EXPECT_FALSE(std::filesystem::exists(nan_path));
+  EXPECT_FALSE(std::filesystem::exists(nan_path + ".tmp"));
 }
 
 }  // namespace

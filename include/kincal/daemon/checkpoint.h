@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
+
 namespace kincal {
 class params_t;  // generated from lcm/params_t.lcm
 }
@@ -42,8 +44,12 @@ inline constexpr double kCheckpointMaxScale = 1e3;
 inline constexpr double kCheckpointMinSigmaFraction = 1e-5;
 bool CheckpointIsValid(const Checkpoint& c, std::string* error);
 
-// Throws std::runtime_error naming the path on I/O failure.
-void WriteCheckpoint(const std::string& path, const Checkpoint& c);
+// Writes atomically (path.tmp created exclusively, never through a link, fsynced, renamed
+// over path). An error names the file, the step and errno's text, and leaves no temporary;
+// a non-finite estimate is not written.
+Status WriteCheckpoint(const std::string& path, const Checkpoint& c);
+// The same for any text output (what: "checkpoint", "report", ... for the messages).
+Status WriteFileAtomically(const std::string& path, const std::string& text, const char* what);
 // Throws std::runtime_error naming the path and what is wrong (CheckpointIsValid too).
 Checkpoint ReadCheckpoint(const std::string& path);
 // YAML: model, effects, parameters {name: {value, sigma, unit}}, and the covariance.
