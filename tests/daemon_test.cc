@@ -144,6 +144,49 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
       << "a missing checkpoint is an error, not a silent fresh start";
 }
 
+// Reproduces issue 16 (items 5 and 7): two daemons recording to one path both exited 0 and
+// the first recording was lost; an unwritable checkpoint folder only showed as logged errors
+// and exit 0.
+TEST(DaemonOutputs, ASecondDaemonOnTheSameOutputIsRefusedNamingTheFirst) {
+  DaemonConfig c = SimConfig5Hz(2);
+  c.record.path = TempPath("shared.lcm");
+  c.checkpoint.path = TempPath("shared.json");
+  Daemon first(c);
+  const std::string pid = "(pid " + std::to_string(::getpid());
+  try {
+    Daemon second(c);
+    FAIL() << "a second daemon recording to the same path was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("shared.lcm: the recording is in use by another process " + pid),
+        std::string::npos)
+        << e.what();
+  }
+  DaemonConfig ck_only = c;
+  ck_only.record.path = TempPath("other.lcm");
+  try {
+    Daemon second(ck_only);
+    FAIL() << "a second daemon writing the same checkpoint was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("shared.json: the checkpoint is in use"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(first.Run(), 0);
+}
+
+TEST(DaemonOutputs, AnUnwritableCheckpointFolderFailsAtStart) {
+  DaemonConfig c = SimConfig5Hz(2);
+  c.checkpoint.path = TempPath("no_such_folder") + "/ck.json";
+  try {
+    Daemon d(c);
+    FAIL() << "started with a checkpoint it cannot write";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("No such file or directory"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
   // A log with a valid simulated run plus hostile events on the controls and frame
   // channels: undecodable bytes, the wrong model, NaN, a huge declared array, a frame

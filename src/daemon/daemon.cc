@@ -20,6 +20,7 @@
 #include "daemon/detection_stage.h"
 #include "daemon/filter_stage.h"
 #include "daemon/health.h"
+#include "daemon/path_lock.h"
 #include "daemon/pose_control_merge.h"
 #include "daemon/pose_stage.h"
 #include "daemon/publisher.h"
@@ -71,9 +72,11 @@ struct Daemon::Impl {
 
   std::mutex status_mu;  // guards what follows
   std::string source_error, model_check_evidence;
+  std::string checkpoint_error;  // the last checkpoint write's failure (empty: written)
   Checkpoint estimate;
 
   std::optional<Checkpoint> resume;
+  PathLock record_lock, checkpoint_lock;  // held for the daemon's life
   HealthReporter health;
   std::string logged_health;  // main thread only
   TimeNs logged_health_at = 0;
@@ -183,11 +186,10 @@ struct Daemon::Impl {
       ck = estimate;
     }
     if (ck.names.empty()) return;
-    try {
-      WriteCheckpoint(cfg.checkpoint.path, ck);
-    } catch (const std::exception& e) {
-      spdlog::error("{}", e.what());
-    }
+    const Status written = WriteCheckpoint(cfg.checkpoint.path, ck);
+    if (!written.ok()) spdlog::error("{}", written.message());
+    std::lock_guard lock(status_mu);
+    checkpoint_error = written.ok() ? "" : written.message();  // the last write counts
   }
 
   // An unrecoverable error in a pipeline thread: report it, close the queues so every
@@ -270,6 +272,16 @@ Daemon::Daemon(DaemonConfig config) {
                                std::string(d.sys.model().name()) + "'");
     }
   }
+  // Outputs are locked before anything is written: a second daemon on the same path stops
+  // here, and an unwritable folder shows now rather than at the first checkpoint.
+  if (!cfg.record.path.empty()) {
+    if (const Status s = d.record_lock.Acquire(cfg.record.path, "recording"); !s.ok())
+      throw std::runtime_error(s.message());
+  }
+  if (!cfg.checkpoint.path.empty()) {
+    if (const Status s = d.checkpoint_lock.Acquire(cfg.checkpoint.path, "checkpoint"); !s.ok())
+      throw std::runtime_error(s.message());
+  }
   const Status opened =
       d.out.Open(cfg.lcm, cfg.record, static_cast<size_t>(cfg.queues.recorder), d.caps.lossless);
   if (!opened.ok()) throw std::runtime_error(opened.message());
@@ -349,6 +361,10 @@ int Daemon::Run() {
   d.out.CloseLog();
   spdlog::info("kincald: {}", SummaryLine(counters()));
   std::lock_guard lock(d.status_mu);
+  if (!d.checkpoint_error.empty()) {
+    spdlog::error("kincald: the final checkpoint was not written: {}", d.checkpoint_error);
+    return 1;
+  }
   return d.source_error.empty() ? 0 : 1;
 }
 
