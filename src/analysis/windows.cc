@@ -12,8 +12,13 @@ namespace {
 // A window whose horizon end lands more than this fraction of the horizon (plus 1 ms)
 // past the nearest pose spans a gap and is not used.
 constexpr double kMaxEndOvershoot = 0.1;
-// The multi-start stage's short windows: a quarter horizon, at least 0.2 s, at most 150.
+// A window's end may also miss its target time by half a typical pose interval: at low pose
+// rates (2-5 Hz) no pose lies within a tenth of a horizon of most targets.
+constexpr double kEndToleranceIntervals = 0.5;
+// The multi-start stage's short windows: a quarter horizon and at least two typical pose
+// intervals, at least 0.2 s, at most 150.
 constexpr double kShortWindowFraction = 0.25;
+constexpr double kShortWindowIntervals = 2.0;
 constexpr double kMinShortWindowS = 0.2;
 constexpr int kMaxShortWindows = 150;
 // The fewest poses a recording must have.
@@ -24,17 +29,19 @@ constexpr size_t kMinPoses = 20;
 constexpr double kInnerGapIntervals = 3.0;
 constexpr double kInnerGapHorizonFraction = 0.25;
 
-// For each pose, the index of the first pose after which a gap follows (n - 1 if none).
-std::vector<int> NextGap(const std::vector<double>& t, double h) {
-  const size_t n = t.size();
+// The median interval between consecutive poses, s.
+double MedianInterval(const std::vector<double>& t) {
   std::vector<double> dt;
-  for (size_t i = 1; i < n; ++i) dt.push_back(t[i] - t[i - 1]);
-  double median = 0.0;
-  if (!dt.empty()) {
-    auto mid = dt.begin() + static_cast<long>(dt.size() / 2);
-    std::nth_element(dt.begin(), mid, dt.end());
-    median = *mid;
-  }
+  for (size_t i = 1; i < t.size(); ++i) dt.push_back(t[i] - t[i - 1]);
+  if (dt.empty()) return 0.0;
+  auto mid = dt.begin() + static_cast<long>(dt.size() / 2);
+  std::nth_element(dt.begin(), mid, dt.end());
+  return *mid;
+}
+
+// For each pose, the index of the first pose after which a gap follows (n - 1 if none).
+std::vector<int> NextGap(const std::vector<double>& t, double median, double h) {
+  const size_t n = t.size();
   const double limit = std::max(kInnerGapIntervals * median, kInnerGapHorizonFraction * h);
   std::vector<int> next(n, static_cast<int>(n) - 1);
   for (size_t k = n - 1; k-- > 0;) {
@@ -49,8 +56,10 @@ int FindEnd(const Dataset& d, int i, double h) {
   const auto it = std::lower_bound(t.begin() + i, t.end(), target - 1e-9);
   if (it == t.end()) return -1;
   const int j = static_cast<int>(it - t.begin());
-  if (t[static_cast<size_t>(j)] - target > kMaxEndOvershoot * h + 1e-3) return -1;  // a gap
-  if (d.next_gap[static_cast<size_t>(i)] < j) return -1;                            // a gap inside
+  const double tolerance =
+      std::max(kMaxEndOvershoot * h, kEndToleranceIntervals * d.pose_interval) + 1e-3;
+  if (t[static_cast<size_t>(j)] - target > tolerance) return -1;  // a gap
+  if (d.next_gap[static_cast<size_t>(i)] < j) return -1;          // a gap inside
   return j;
 }
 
@@ -148,7 +157,8 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     warnings->push_back(m.str());
   }
   d.t_split = t0 + o.fit_fraction * (t1 - t0);
-  d.next_gap = NextGap(d.t, o.horizon_s);
+  d.pose_interval = MedianInterval(d.t);
+  d.next_gap = NextGap(d.t, d.pose_interval, o.horizon_s);
   d.sigma = o.pose_sigma ? *o.pose_sigma : EstimatePoseSigma(rec);
   d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1])
             .asDiagonal();
@@ -164,7 +174,8 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     if (fit || held) d.eval.push_back({i, j});
   }
   d.fit_windows = NonOverlapping(d, o.horizon_s, t0, d.t_split, o.max_fit_windows);
-  const double hs = std::max(kMinShortWindowS, kShortWindowFraction * o.horizon_s);
+  const double hs = std::max({kMinShortWindowS, kShortWindowFraction * o.horizon_s,
+                              kShortWindowIntervals * d.pose_interval});
   d.short_windows =
       NonOverlapping(d, hs, t0, d.t_split, std::min(kMaxShortWindows, o.max_fit_windows));
   if (d.fit_windows.size() < 5)

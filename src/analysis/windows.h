@@ -25,6 +25,7 @@ struct Dataset {
   std::vector<int> next_gap;  // per pose: the first pose after which a gap follows
   double t_ctrl0 = 0, t_ctrl1 = 0, t_split = 0;
   double horizon = 1.0;
+  double pose_interval = 0.0;  // median interval between consecutive poses, s
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector2d sigma{1, 1};
   std::vector<Window> eval;           // every (strided) pose with a horizon end

@@ -34,4 +34,26 @@ inline Recording UnicycleRecording(double duration_s, const std::vector<std::str
   return rec;
 }
 
+// A clean unicycle (k_v 0.9, k_omega 0.8) under smooth random commands sampled at
+// `control_hz`, poses at `pose_hz` with 1 mm / 3 mrad noise.
+inline Recording UnicycleAtRates(double duration_s, double pose_hz, double control_hz,
+                                 uint64_t seed) {
+  const System sys = MakeSystem("unicycle");
+  VecN<kMaxState> p(2);
+  p << 0.9, 0.8;
+  std::mt19937_64 rng(seed);
+  Recording rec;
+  rec.source = "simulated unicycle";
+  rec.controls = ControlSignal(2, 0);
+  const std::array<double, 2> lo = {-0.2, -1.0}, hi = {0.8, 1.0};
+  const TimeNs t1 = SecondsToNs(duration_s);
+  AppendSmoothRandom(&rec.controls, 0, t1, lo, hi, 2.0, control_hz, rng);
+  const auto times = FrameTimes(0, t1, FrameTimingOptions{pose_hz, 0.0, 0.0, 0.0}, rng);
+  const StateVec x0 = sys.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
+  const auto traj = SimulateTruth(sys, x0, rec.controls, times);
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
+  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
+  return rec;
+}
+
 }  // namespace kincal::testing
