@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
+#include "kincal/effect.h"
 
 namespace kincal::app {
 namespace {
@@ -103,6 +104,16 @@ Command AddAnalyze(CLI::App& app) {
           cur += c;
         }
       }
+      if (depth != 0 || !cur.empty()) {
+        throw std::runtime_error("--effects '" + a->effects +
+                                 "': unbalanced brackets (expected name or name[channel,...], "
+                                 "separated by commas)");
+      }
+      for (const auto& spec : o.effects) {
+        EffectSpec parsed;
+        if (const Status s = ParseEffectSpec(spec, &parsed); !s.ok())
+          throw std::runtime_error("--effects: " + s.message());
+      }
     }
     if (!a->pose_sigma.empty()) {
       const auto comma = a->pose_sigma.find(',');
@@ -149,7 +160,10 @@ Command AddAnalyze(CLI::App& app) {
       }
     };
     const AnalyzeResult r = Analyze(rec, o);
-    WriteAnalysisReport(r, a->out);
+    if (const Status written = WriteAnalysisReport(r, a->out); !written.ok()) {
+      std::cerr << "kincal analyze: the report was not written: " << written.message() << "\n";
+      return 1;
+    }
     // Plots from the report's data (matplotlib); the report stands without them.
     const std::string script = PlotScript();
     if (!script.empty()) {

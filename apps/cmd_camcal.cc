@@ -1,5 +1,6 @@
 // kincal camcal: camera calibration from board images or a points file, with
 // cv::calibrateCamera on the same data side by side.
+#include <charconv>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -17,6 +18,8 @@
 
 namespace kincal::app {
 namespace {
+
+constexpr int kMaxImageSide = 65535;
 
 std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, const Board& b, int* w,
                                                      int* h) {
@@ -95,15 +98,25 @@ Command AddCamcal(CLI::App& app) {
       std::smatch m;
       if (!std::regex_match(a->size, m, re))
         throw std::runtime_error("--image-size '" + a->size + "': expected WxH, e.g. 640x480");
-      opt.width = std::stoi(m[1]);
-      opt.height = std::stoi(m[2]);
+      auto dim = [&](const std::string& text) {
+        int v = 0;
+        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (ec != std::errc() || end != text.data() + text.size() || v < 1 || v > kMaxImageSide) {
+          throw std::runtime_error("--image-size '" + a->size + "': each side must be 1 to " +
+                                   std::to_string(kMaxImageSide) + " pixels");
+        }
+        return v;
+      };
+      opt.width = dim(m[1]);
+      opt.height = dim(m[2]);
       views = vision::ReadCalibrationPoints(a->points);
     } else {
       if (a->board.empty()) throw std::runtime_error("--images needs --board KIND:COLSxROWS:PITCH");
       views = ViewsFromImages(a->images, Board::Parse(a->board), &opt.width, &opt.height);
     }
     const auto r = vision::CalibrateCamera(views, opt);
-    vision::WriteCameraYaml(r.camera, a->out);
+    if (const Status s = vision::WriteCameraYaml(r.camera, a->out); !s.ok())
+      throw std::runtime_error(s.message());
     // OpenCV on the same points.
     const auto cv_result = vision::CalibrateWithOpenCv(views, opt, r.camera);
     const double cv_rms = cv_result.rms_px;
@@ -138,7 +151,7 @@ Command AddCamcal(CLI::App& app) {
       j["views"] = views.size();
       o["rms_px"] = cv_rms;
       j["opencv"] = o;
-      std::ofstream(a->json) << j.dump(2) << "\n";
+      WriteOutput(a->json, j.dump(2) + "\n", "calibration JSON");
     }
     return 0;
   };

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <iostream>
 #include <kincal/params_t.hpp>
+#include <sstream>
 
 #include "commands.h"
 #include "kincal/daemon/checkpoint.h"
@@ -66,9 +67,9 @@ Command AddExport(CLI::App& app) {
     if (a->out.empty()) {
       daemon::WriteExportYaml(std::cout, c, source);
     } else {
-      std::ofstream out(a->out);
-      if (!out) throw std::runtime_error(a->out + ": cannot write");
+      std::ostringstream out;
       daemon::WriteExportYaml(out, c, source);
+      WriteOutput(a->out, out.str(), "export");
       std::cout << "wrote " << a->out << "\n";
     }
     return 0;

@@ -93,9 +93,7 @@ Command AddReproduce(CLI::App& app) {
                                 {"d", {{"value", e[2]}, {"sigma", s[2]}}}};
       }
       j["truth"] = {{"r_l", kThesisRL}, {"r_r", kThesisRR}, {"d", kThesisD}};
-      std::ofstream out(args->json);
-      if (!out) throw std::runtime_error("cannot write " + args->json);
-      out << j.dump(2) << "\n";
+      WriteOutput(args->json, j.dump(2) + "\n", "results JSON");
       std::cout << "  wrote " << args->json << "\n";
     }
     return 0;

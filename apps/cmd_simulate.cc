@@ -75,8 +75,7 @@ Command AddSimulate(CLI::App& app) {
 
     if (!args->export_dir.empty()) {
       std::filesystem::create_directories(args->export_dir);
-      std::ofstream c(args->export_dir + "/controls.csv"), p(args->export_dir + "/poses.csv");
-      if (!c || !p) throw std::runtime_error("cannot write to " + args->export_dir);
+      std::ostringstream c, p;
       c << "t";
       for (const auto& ch : truth_sys.model().controls()) c << "," << ch.name;
       c << "\n" << std::setprecision(10);
@@ -89,6 +88,8 @@ Command AddSimulate(CLI::App& app) {
       p << "t,x,y,theta\n" << std::setprecision(10);
       for (const auto& m : meas)
         p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
+      WriteOutput(args->export_dir + "/controls.csv", c.str(), "controls CSV");
+      WriteOutput(args->export_dir + "/poses.csv", p.str(), "poses CSV");
       std::cout << "wrote " << args->export_dir << "/controls.csv and poses.csv\n";
     }
     OnlineCalibratorOptions opt;
@@ -106,12 +107,9 @@ Command AddSimulate(CLI::App& app) {
     }
     cal.Initialize(meas.front().t_ns, meas.front().z, R, p_guess, P0);
 
-    std::ofstream csv;
-    if (!args->csv.empty()) {
-      csv.open(args->csv);
-      if (!csv) throw std::runtime_error("cannot write " + args->csv);
-      csv << "t_s,name,value,sigma,truth\n";
-    }
+    std::ostringstream csv;  // written whole at the end
+    const bool want_csv = !args->csv.empty();
+    if (want_csv) csv << "t_s,name,value,sigma,truth\n";
     auto truth_of = [&](int i) {
       const int j = truth_sys.ParamIndex(est_sys.params()[static_cast<size_t>(i)].name);
       return j < 0 ? NAN : p_true[j];
@@ -145,7 +143,7 @@ Command AddSimulate(CLI::App& app) {
     for (size_t k = 1; k < meas.size(); ++k) {
       cal.AddPose(meas[k].t_ns, meas[k].z, meas[k].R);
       const double t = NsToSeconds(meas[k].t_ns);
-      if (csv.is_open()) {
+      if (want_csv) {
         const auto p = cal.params();
         const auto C = cal.params_covariance();
         for (int i = 0; i < np; ++i) {
@@ -169,6 +167,7 @@ Command AddSimulate(CLI::App& app) {
       if (std::abs(p[i] - truth_of(i)) <= 3.0 * std::sqrt(C(i, i))) ++inside;
     }
     std::cout << inside << "/" << np << " parameters within 3 sigma of the truth\n";
+    if (want_csv) WriteOutput(args->csv, csv.str(), "convergence CSV");
     return 0;
   };
 }

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
 #include "board.h"
 #include "commands.h"
@@ -18,6 +19,17 @@
 
 namespace kincal::app {
 namespace {
+
+// An image in the format its extension names (.png, .jpg, ...), written whole or not at all.
+void WriteImage(const std::string& path, const cv::Mat& image) {
+  std::vector<uint8_t> bytes;
+  const std::string ext = std::filesystem::path(path).extension().string();
+  if (ext.empty() || !cv::imencode(ext, image, bytes)) {
+    throw std::runtime_error(path + ": cannot encode an image for the extension '" + ext +
+                             "' (expected .png, .jpg, .bmp, ...)");
+  }
+  WriteOutput(path, std::string(bytes.begin(), bytes.end()), "image");
+}
 
 vision::TargetLayout LoadLayout(const std::string& path) {
   return vision::ReadTargetLayoutYaml(path);
@@ -36,8 +48,7 @@ Command AddTarget(CLI::App& app) {
     const double y0 = -0.5 * layout.plate_size_m.y(), y1 = -y0;
     const double pad = 0.0;
     const double w = (x1 - x0) * 1e3, h = (y1 - y0) * 1e3;
-    std::ofstream f(*out);
-    if (!f) throw std::runtime_error(*out + ": cannot write");
+    std::ostringstream f;
     // Drawn seen from above: target x (forward) to the right, target y (left) up.
     f << std::setprecision(6) << "<svg xmlns='http://www.w3.org/2000/svg' width='" << w
       << "mm' height='" << h << "mm' viewBox='0 0 " << w << " " << h << "'>\n<rect width='" << w
@@ -57,6 +68,7 @@ Command AddTarget(CLI::App& app) {
       << "' font-size='3' fill='red'>y</text>\n<text x='2' y='" << h - 2
       << "' font-size='2.5'>kincal target '" << layout.name << "', markers "
       << layout.marker_radius_m * 2e3 << " mm, print at 100 %</text>\n</svg>\n";
+    WriteOutput(*out, f.str(), "target SVG");
     std::cout << "wrote " << *out << " (" << w << " x " << h << " mm)\n";
     return 0;
   };
@@ -117,16 +129,19 @@ Command AddRender(CLI::App& app) {
                Eigen::AngleAxisd(a->tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
       pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // on the floor (tilted about x)
     }
-    if (!a->intrinsics_out.empty()) vision::WriteCameraYaml(cam, a->intrinsics_out);
+    if (!a->intrinsics_out.empty()) {
+      if (const Status s = vision::WriteCameraYaml(cam, a->intrinsics_out); !s.ok())
+        throw std::runtime_error(s.message());
+    }
     if (!a->board.empty() && Board::Parse(a->board).kind == "chessboard") {
       const Board board = Board::Parse(a->board);
       const auto fr =
           vision::RenderChessboard(cam, pose, board.cols, board.rows, board.pitch, ro, rng);
-      if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
+      WriteImage(a->out, fr.image);
       return 0;
     }
     const auto fr = vision::RenderTarget(cam, pose, layout, ro, rng);
-    if (!cv::imwrite(a->out, fr.image)) throw std::runtime_error(a->out + ": cannot write");
+    WriteImage(a->out, fr.image);
     std::cout << std::fixed << std::setprecision(4);
     for (size_t i = 0; i < fr.centres.size() && a->board.empty(); ++i) {
       std::cout << "M" << i + 1 << " true centre (" << fr.centres[i].x() << ", "
@@ -212,8 +227,7 @@ Command AddDetect(CLI::App& app) {
       cv::putText(vis, pose_text, {8, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {255, 80, 0});
       std::cout << "pose: " << pose_text << "\n";
     }
-    if (!a->overlay.empty() && !cv::imwrite(a->overlay, vis))
-      throw std::runtime_error(a->overlay + ": cannot write");
+    if (!a->overlay.empty()) WriteImage(a->overlay, vis);
     return markers.empty() ? 1 : 0;
   };
 }
@@ -264,8 +278,7 @@ Command AddFloorcal(CLI::App& app) {
     // Scale the covariance by the observed reprojection error (sigma = rms).
     const double s2 = std::max(r.rms_px * r.rms_px, 1e-6);
     const Eigen::Matrix<double, 6, 6> cov = r.covariance * s2;
-    cv::FileStorage fs(a->out, cv::FileStorage::WRITE);
-    if (!fs.isOpened()) throw std::runtime_error(a->out + ": cannot write");
+    cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
     cv::Mat R(3, 3, CV_64F), t(3, 1, CV_64F), C(6, 6, CV_64F);
     for (int i = 0; i < 3; ++i) {
       t.at<double>(i) = r.pose.t[i];
@@ -274,6 +287,7 @@ Command AddFloorcal(CLI::App& app) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C.at<double>(i, j) = cov(i, j);
     fs << "R_cf" << R << "t_cf" << t << "covariance_t_rot" << C << "rms_px" << r.rms_px;
+    WriteOutput(a->out, fs.releaseAndGetString(), "floor extrinsics");
     std::cout << std::fixed << std::setprecision(4)
               << "camera height above the floor plane: " << (-(r.pose.R.transpose() * r.pose.t)).z()
               << " m; t_cf = [" << r.pose.t.transpose() << "] m (1-sigma " << std::sqrt(cov(0, 0))

@@ -4,10 +4,15 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
 
 namespace kincal::app {
 
 using Command = std::function<int()>;
+
+// Writes a tool's output whole or not at all (kincal/io/output_file.h); throws
+// std::runtime_error with the status's message, which main() prints before exiting 1.
+void WriteOutput(const std::string& path, const std::string& text, const char* what);
 
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);

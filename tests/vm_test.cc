@@ -366,7 +366,7 @@ TEST(VmV4l2, TheDeviceDisappearsAndComesBack) {
   cam.fx = cam.fy = 500;
   cam.cx = cam.width / 2.0;
   cam.cy = cam.height / 2.0;
-  vision::WriteCameraYaml(cam, cfg.camera.intrinsics);
+  ASSERT_TRUE(vision::WriteCameraYaml(cam, cfg.camera.intrinsics).ok());
   Daemon d(cfg);
   int rc = -1;
   std::thread runner([&] { rc = d.Run(); });

@@ -32,7 +32,15 @@ bool AnalyzeOptions::IsValid(std::string* error) const {
     *error = "pose sigmas must be > 0";
     return false;
   }
-  if (max_fit_windows < 10 || max_eval_windows < 10 || poses_per_window < 1 || max_effects < 0) {
+  if (max_effects < 0) {
+    *error = "--max-effects must be >= 0";
+    return false;
+  }
+  if (num_threads < 1) {
+    *error = "--threads must be >= 1";
+    return false;
+  }
+  if (max_fit_windows < 10 || max_eval_windows < 10 || poses_per_window < 1) {
     *error = "max_fit_windows, max_eval_windows >= 10, poses_per_window >= 1 expected";
     return false;
   }

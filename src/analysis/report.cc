@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "kincal/analysis/analyze.h"
+#include "kincal/io/output_file.h"
 
 namespace kincal {
 namespace {
@@ -124,7 +125,7 @@ std::string Html(const AnalyzeResult& r) {
 
 }  // namespace
 
-void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
+Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   std::filesystem::create_directories(dir);
   json j;
   j["model"] = r.model;
@@ -160,8 +161,7 @@ void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
                 {"pose_rows", r.stats.pose_rows},
                 {"control_repeated_times", r.stats.control_repeated_times},
                 {"pose_repeated_times", r.stats.pose_repeated_times}};
-  std::ofstream(dir + "/report.json") << j.dump(2) << "\n";
-  std::ofstream csv(dir + "/residuals.csv");
+  std::ostringstream csv;
   csv << "step,t_s,heldout,along_m,cross_m,heading_rad\n" << std::setprecision(9);
   for (const auto& [step, pts] : r.residual_steps) {
     for (const auto& p : pts) {
@@ -169,10 +169,11 @@ void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
           << "," << p.heading << "\n";
     }
   }
-  std::ofstream(dir + "/report.html") << Html(r);
-  if (!std::ofstream(dir + "/report.json", std::ios::app)) {
-    throw std::runtime_error(dir + ": cannot write the report");
-  }
+  // The JSON last: a report.json in the folder means the whole report is there.
+  if (Status s = WriteFileAtomically(dir + "/residuals.csv", csv.str(), "residuals"); !s.ok())
+    return s;
+  if (Status s = WriteFileAtomically(dir + "/report.html", Html(r), "report"); !s.ok()) return s;
+  return WriteFileAtomically(dir + "/report.json", j.dump(2) + "\n", "report");
 }
 
 }  // namespace kincal

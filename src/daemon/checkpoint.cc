@@ -6,8 +6,10 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iomanip>
@@ -16,49 +18,10 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kincal/io/output_file.h"
 #include "kincal/system.h"
 
 namespace kincal::daemon {
-
-// Writes `text` to path through path.tmp (created exclusively, never through a link),
-// fsynced, then renamed over path; on any failure the temporary is removed and the status
-// names the file, the step and errno's text.
-Status WriteFileAtomically(const std::string& path, const std::string& text, const char* what) {
-  const std::string tmp = path + ".tmp";
-  ::unlink(tmp.c_str());  // a stale temporary (or a link planted there): removed, not followed
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (fd < 0) {
-    return Status::Error(tmp + ": cannot create the " + what + ": " + std::strerror(errno));
-  }
-  auto fail = [&](const std::string& step) {
-    const int err = errno;
-    ::close(fd);
-    ::unlink(tmp.c_str());
-    return Status::Error(tmp + ": cannot " + step + " the " + what + ": " + std::strerror(err));
-  };
-  size_t done = 0;
-  while (done < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      if (n == 0) errno = EIO;
-      return fail("write");
-    }
-    done += static_cast<size_t>(n);
-  }
-  if (::fsync(fd) != 0) return fail("sync");
-  if (::close(fd) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    return Status::Error(tmp + ": cannot close the " + what + ": " + std::strerror(err));
-  }
-  if (::rename(tmp.c_str(), path.c_str()) != 0) {
-    const int err = errno;
-    ::unlink(tmp.c_str());
-    return Status::Error(path + ": cannot replace the " + what + ": " + std::strerror(err));
-  }
-  return {};
-}
 
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c) {
@@ -214,18 +177,60 @@ Checkpoint ReadCheckpoint(const std::string& path) {
   return c;
 }
 
+namespace {
+
+// A YAML scalar: plain when it is a simple word, else double-quoted with escapes.
+std::string YamlScalar(const std::string& s) {
+  const bool plain = !s.empty() && std::all_of(s.begin(), s.end(), [](char ch) {
+    return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '.' || ch == '-';
+  });
+  if (plain) return s;
+  std::string q = "\"";
+  for (const char ch : s) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (ch == '"' || ch == '\\') {
+      q += '\\';
+      q += ch;
+    } else if (ch == '\n') {
+      q += "\\n";
+    } else if (u < 0x20 || u == 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof(buf), "\\x%02x", u);
+      q += buf;
+    } else {
+      q += ch;
+    }
+  }
+  return q + "\"";
+}
+
+// Text for a YAML comment: one line, control characters shown as '?'.
+std::string CommentText(std::string s) {
+  for (char& ch : s) {
+    if (static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f) ch = '?';
+  }
+  return s;
+}
+
+}  // namespace
+
 void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source) {
-  out << "# kincal calibration of a " << c.model << " robot, from " << source << "\n"
-      << "# " << c.update_count << " pose updates, filter " << c.filter << "; sigma is 1-sigma.\n"
-      << "model: " << c.model << "\n"
+  out << "# kincal calibration of a " << CommentText(c.model) << " robot, from "
+      << CommentText(source) << "\n"
+      << "# " << c.update_count << " pose updates, filter " << CommentText(c.filter)
+      << "; sigma is 1-sigma.\n"
+      << "model: " << YamlScalar(c.model) << "\n"
       << "effects: [";
-  for (size_t i = 0; i < c.effects.size(); ++i) out << (i ? ", " : "") << c.effects[i];
+  for (size_t i = 0; i < c.effects.size(); ++i) out << (i ? ", " : "") << YamlScalar(c.effects[i]);
   out << "]\nupdated_utime: " << c.utime << "\nparameters:\n" << std::setprecision(9);
   for (size_t i = 0; i < c.names.size(); ++i) {
     const double s =
         std::sqrt(std::max(0.0, c.covariance(static_cast<int>(i), static_cast<int>(i))));
-    out << "  " << c.names[i] << ": {value: " << c.values[i] << ", sigma: " << std::setprecision(3)
-        << s << std::setprecision(9) << ", unit: \"" << c.units[i] << "\"}\n";
+    std::string unit = YamlScalar(c.units[i]);
+    if (unit.front() != '"') unit = "\"" + unit + "\"";
+    out << "  " << YamlScalar(c.names[i]) << ": {value: " << c.values[i]
+        << ", sigma: " << std::setprecision(3) << s << std::setprecision(9) << ", unit: " << unit
+        << "}\n";
   }
   out << "covariance:   # row-major, in the order of 'parameters'\n";
   for (int i = 0; i < c.covariance.rows(); ++i) {

@@ -415,8 +415,14 @@ bool FilterOptions::IsValid(std::string* error) const {
 }
 
 bool QueueOptions::IsValid(std::string* error) const {
+  // Upper bounds keep memory bounded by the configuration: a frame slot holds a whole
+  // image, the others a sample or a log event each.
   return Expect(frames >= 2 && poses >= 2 && controls >= 2 && recorder >= 16,
-                "queues: frames, poses, controls >= 2, recorder >= 16", error);
+                "queues: frames, poses, controls >= 2, recorder >= 16", error) &&
+         Expect(frames <= 256 && poses <= 65536 && controls <= 65536 && recorder <= 1 << 20,
+                "queues: frames <= 256 (each holds a whole image), poses and controls <= 65536, "
+                "recorder <= 1048576",
+                error);
 }
 
 bool RecordOptions::IsValid(std::string* error) const {

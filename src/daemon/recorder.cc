@@ -1,17 +1,29 @@
 // LCM event-log writer thread.
 #include "daemon/recorder.h"
 
+#include <fcntl.h>
 #include <lcm/eventlog.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 namespace kincal::daemon {
 
 Status Recorder::Open(const std::string& path, size_t capacity, FullPolicy policy,
                       double flush_every_s, std::unique_ptr<Recorder>* out) {
+  // Created (or truncated) here without following a link, so that liblcm's fopen below
+  // writes to a regular file of ours: a link planted at the path is refused, not followed.
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    return Status::Error(
+        path + ": cannot create LCM log: " + std::strerror(errno) +
+        (errno == ELOOP ? " (it is a symbolic link, which kincald never follows)" : ""));
+  }
+  ::close(fd);
   lcm_eventlog_t* log = lcm_eventlog_create(path.c_str(), "w");
   if (log == nullptr) {
     return Status::Error(path + ": cannot create LCM log: " + std::strerror(errno));

@@ -28,6 +28,11 @@ class ReplaySource final : public FrameSource {
       if (const Status s = LcmLogReader::Open(opt_.path, &log_); !s.ok()) {
         return Status::Error("replay: " + s.message());
       }
+      if (log_->size() == 0) {
+        log_.reset();
+        return Status::Error("replay: " + opt_.path +
+                             ": the log is empty (0 bytes), nothing to replay");
+      }
     }
     start_mono_ = MonotonicNs();
     return {};

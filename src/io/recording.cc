@@ -1,8 +1,12 @@
 #include "kincal/io/recording.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <map>
 #include <sstream>
@@ -57,9 +61,32 @@ double ParseNumber(const std::string& tok, const std::string& where, const std::
 }
 
 std::ifstream Open(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    throw RecordingError(path + ": cannot open for reading: " + std::strerror(errno));
+  }
+  if (S_ISDIR(st.st_mode)) throw RecordingError(path + ": is a directory, expected a text file");
   std::ifstream in(path);
-  if (!in) throw RecordingError(path + ": cannot open for reading");
+  if (!in) throw RecordingError(path + ": cannot open for reading: " + std::strerror(errno));
   return in;
+}
+
+// std::getline with a bound: memory stays bounded whatever the file (a line of /dev/zero
+// never ends). False at the end of the file; throws naming the line when it is too long.
+bool ReadLine(std::istream& in, std::string* line, const std::string& path, int n) {
+  line->clear();
+  char ch;
+  bool any = false;
+  while (in.get(ch)) {
+    any = true;
+    if (ch == '\n') return true;
+    if (line->size() >= kMaxRecordingLineBytes) {
+      throw RecordingError(path + ":" + std::to_string(n) + ": line longer than " +
+                           std::to_string(kMaxRecordingLineBytes) + " bytes: not a text recording");
+    }
+    line->push_back(ch);
+  }
+  return any;
 }
 
 // Reads a CSV with a header; returns rows with columns ordered as `wanted`.
@@ -69,7 +96,7 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
   int n = 0;
   std::vector<int> order;
   std::vector<Row> rows;
-  while (std::getline(in, line)) {
+  while (ReadLine(in, &line, path, n + 1)) {
     ++n;
     line = Trim(line);
     if (line.empty() || line[0] == '#') continue;
@@ -125,7 +152,7 @@ std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
   std::string line;
   int n = 0;
   std::vector<Row> rows;
-  while (std::getline(in, line)) {
+  while (ReadLine(in, &line, path, n + 1)) {
     ++n;
     line = Trim(line);
     if (line.empty()) continue;

@@ -5,6 +5,8 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include "kincal/io/output_file.h"
+
 namespace kincal::vision {
 
 Eigen::Vector2d CameraModel::NormalizedToPixel(const Eigen::Vector2d& n) const {
@@ -87,13 +89,13 @@ CameraModel ReadCameraYaml(const std::string& path) {
   return c;
 }
 
-void WriteCameraYaml(const CameraModel& c, const std::string& path) {
-  cv::FileStorage fs(path, cv::FileStorage::WRITE);
-  if (!fs.isOpened()) throw std::runtime_error(path + ": cannot write");
+Status WriteCameraYaml(const CameraModel& c, const std::string& path) {
+  cv::FileStorage fs(".yaml", cv::FileStorage::WRITE | cv::FileStorage::MEMORY);
   const cv::Mat K = (cv::Mat_<double>(3, 3) << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1);
   const cv::Mat D = (cv::Mat_<double>(5, 1) << c.k1, c.k2, c.p1, c.p2, c.k3);
   fs << "image_width" << c.width << "image_height" << c.height << "camera_matrix" << K
      << "distortion_coefficients" << D;
+  return WriteFileAtomically(path, fs.releaseAndGetString(), "camera calibration");
 }
 
 }  // namespace kincal::vision

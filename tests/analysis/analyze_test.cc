@@ -9,6 +9,7 @@
 #include <array>
 #include <random>
 
+#include "analysis/analysis_test_util.h"
 #include "kincal/simulator.h"
 #include "test_util.h"
 
@@ -74,7 +75,9 @@ TEST_P(Undeclared, FindsNamesAndRecoversTheHiddenEffect) {
   const Recording rec = SimulateRecording(c, 100.0);
   const AnalyzeResult r = Analyze(rec, FastOptions(sc.model));
   // KINCAL_DEBUG_DIR=DIR keeps the report of a failing case for inspection.
-  if (const char* dir = getenv("KINCAL_DEBUG_DIR")) WriteAnalysisReport(r, dir);
+  if (const char* dir = getenv("KINCAL_DEBUG_DIR")) {
+    EXPECT_TRUE(WriteAnalysisReport(r, dir).ok());
+  }
   std::string accepted;
   for (const auto& e : r.after.effects) accepted += e + " ";
   for (const auto& h : c.hidden) {
@@ -214,6 +217,35 @@ TEST(Timing, ClockOffsetOfSecondsIsFound) {
   for (const auto& p : r.after.params) {
     if (p.name == "delay_s") {
       EXPECT_NEAR(p.value, 1.7, 3.0 * p.sigma);
+    }
+  }
+}
+
+// Reproduces issue 16 (item 4): poses at 10 Hz or 5 Hz with the default horizon failed with
+// "baseline fit failed from every start". Every pose rate from 2 Hz to 1 kHz and control
+// rate from 1 Hz to 1 kHz works with the defaults, and recovers the truth within 3 sigma.
+TEST(Rates, DefaultsWorkFromTwoHertzToOneKilohertz) {
+  struct Rates {
+    double pose_hz, control_hz, duration_s;
+  };
+  for (const Rates r : {Rates{2, 50, 240}, Rates{5, 50, 120}, Rates{10, 50, 120},
+                        Rates{1000, 50, 60}, Rates{20, 1, 120}, Rates{20, 1000, 60}}) {
+    const Recording rec = testing::UnicycleAtRates(r.duration_s, r.pose_hz, r.control_hz, 3);
+    AnalyzeOptions o;
+    o.model = "unicycle";
+    o.effects_mode = "none";
+    AnalyzeResult res;
+    try {
+      res = Analyze(rec, o);
+    } catch (const AnalysisError& e) {
+      ADD_FAILURE() << r.pose_hz << " Hz poses, " << r.control_hz << " Hz controls: " << e.what();
+      continue;
+    }
+    const double truth[2] = {0.9, 0.8};
+    for (size_t i = 0; i < 2; ++i) {
+      const auto& p = res.before.params[i];
+      EXPECT_NEAR(p.value, truth[i], 3 * p.sigma)
+          << p.name << " at " << r.pose_hz << " Hz poses, " << r.control_hz << " Hz controls";
     }
   }
 }

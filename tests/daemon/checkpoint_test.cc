@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <kincal/controls_t.hpp>
@@ -11,6 +12,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "daemon/daemon_test_util.h"
@@ -83,6 +85,21 @@ TEST(Checkpoint, ReadRefusesAnImplausibleFileNamingIt) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path + ": value of 'r_l'"), std::string::npos) << e.what();
   }
+}
+
+// Reproduces issue 16 (item 12): a unit holding '"' and a newline made YAML that did not
+// parse.
+TEST(Checkpoint, ExportEscapesEveryString) {
+  Checkpoint c = Good();
+  c.units[0] = "m\"\nx: 1";
+  c.effects = {"actuator_lag[omega_l]"};
+  std::ostringstream yaml;
+  WriteExportYaml(yaml, c, "a\nb");
+  const std::string y = yaml.str();
+  EXPECT_NE(y.find("unit: \"m\\\"\\nx: 1\"}"), std::string::npos) << y;
+  EXPECT_NE(y.find("effects: [\"actuator_lag[omega_l]\"]"), std::string::npos) << y;
+  EXPECT_NE(y.find("from a?b\n"), std::string::npos) << y;
+  EXPECT_EQ(std::count(y.begin(), y.end(), '\n'), 13) << y;  // no line was split
 }
 
 TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {

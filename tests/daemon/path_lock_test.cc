@@ -24,8 +24,9 @@ TEST(PathLock, ASecondHolderIsRefusedWithTheFirstOnesPid) {
   if (child == 0) {
     PathLock second;
     const Status s = second.Acquire(path, "recording");
-    const bool named = !s.ok() && s.message().find("the recording is in use by another process (pid " +
-                                                   std::to_string(::getppid())) != std::string::npos;
+    const bool named =
+        !s.ok() && s.message().find("the recording is in use by another process (pid " +
+                                    std::to_string(::getppid())) != std::string::npos;
     ::_exit(named ? 0 : 1);
   }
   int status = 0;

@@ -66,5 +66,21 @@ TEST(Recorder, LiveModeCountsWhatAFullQueueDrops) {
   EXPECT_EQ(rec.written() + rec.lost(), 200) << "every event is written or counted as lost";
 }
 
+// Reproduces issue 16 (item 8): --record followed a link planted at its path and
+// overwrote the link's target.
+TEST(Recorder, ALinkAtThePathIsRefusedNotFollowed) {
+  const std::string victim = TempPath("rec_victim.txt");
+  std::ofstream(victim) << "precious";
+  const std::string path = TempPath("rec_link.lcm");
+  std::filesystem::remove(path);
+  std::filesystem::create_symlink(victim, path);
+  std::unique_ptr<Recorder> opened;
+  const Status s = Recorder::Open(path, 64, FullPolicy::kBlock, 0.1, &opened);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("symbolic link"), std::string::npos) << s.message();
+  std::ifstream in(victim);
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "precious");
+}
+
 }  // namespace
 }  // namespace kincal::daemon

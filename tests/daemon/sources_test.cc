@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 
 #include "daemon/daemon_test_util.h"
 
@@ -75,6 +76,11 @@ TEST(Sources, ReplayOfAMissingLogNamesIt) {
   const Status dir = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
   EXPECT_NE(dir.message().find("is a directory, expected an LCM log file"), std::string::npos)
       << dir.message();
+  r.path = TempPath("empty.lcm");
+  { std::ofstream touch(r.path); }
+  const Status empty = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
+  EXPECT_NE(empty.message().find("the log is empty (0 bytes)"), std::string::npos)
+      << empty.message();
   r.path = "/dev/zero";
   const Status dev = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
   EXPECT_NE(dev.message().find("is not a regular file"), std::string::npos) << dev.message();

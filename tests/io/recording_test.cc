@@ -51,6 +51,25 @@ TEST_F(RecordingCsv, EmptyFileAndWrongRowLength) {
   EXPECT_NE(Error("t,v,omega\n", kPoses).find("c.csv: no control rows"), std::string::npos);
 }
 
+// Reproduces issue 16 (items 9 and 13): a directory given as a CSV said "empty file", and
+// --poses /dev/zero read one endless line (3.9 GB in 10 s).
+TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
+  std::string e;
+  try {
+    ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle"));
+  } catch (const RecordingError& err) {
+    e = err.what();
+  }
+  EXPECT_NE(e.find("is a directory, expected a text file"), std::string::npos) << e;
+  e.clear();
+  try {
+    ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero", *MakeModel("unicycle"));
+  } catch (const RecordingError& err) {
+    e = err.what();
+  }
+  EXPECT_NE(e.find("/dev/zero:1: line longer than 65536 bytes"), std::string::npos) << e;
+}
+
 TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
                                        Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),

@@ -36,7 +36,7 @@ TEST(Camera, UndistortInvertsDistort) {
 TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string path = (dir / "kincal_cam_test.yaml").string();
-  WriteCameraYaml(TestCamera(), path);
+  ASSERT_TRUE(WriteCameraYaml(TestCamera(), path).ok());
   const CameraModel c = ReadCameraYaml(path);
   EXPECT_EQ(c.width, 640);
   EXPECT_DOUBLE_EQ(c.fx, 820);

@@ -26,6 +26,7 @@
 
 #include "kincal/analysis/diagnosis.h"
 #include "kincal/io/recording.h"
+#include "kincal/status.h"
 
 namespace kincal {
 
@@ -120,8 +121,9 @@ struct AnalyzeResult {
 
 AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& options);
 
-// Writes DIR/report.json, DIR/residuals.csv and DIR/report.html (which shows the PNGs
-// that scripts/plot_analysis.py draws from those files).
-void WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir);
+// Writes DIR/residuals.csv, DIR/report.html (which shows the PNGs that
+// scripts/plot_analysis.py draws from those files) and last DIR/report.json, each whole or
+// not at all (kincal/io/output_file.h). An error names the file and errno's text.
+Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir);
 
 }  // namespace kincal

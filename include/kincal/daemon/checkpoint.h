@@ -48,8 +48,7 @@ bool CheckpointIsValid(const Checkpoint& c, std::string* error);
 // over path). An error names the file, the step and errno's text, and leaves no temporary;
 // a non-finite estimate is not written.
 Status WriteCheckpoint(const std::string& path, const Checkpoint& c);
-// The same for any text output (what: "checkpoint", "report", ... for the messages).
-Status WriteFileAtomically(const std::string& path, const std::string& text, const char* what);
+
 // Throws std::runtime_error naming the path and what is wrong (CheckpointIsValid too).
 Checkpoint ReadCheckpoint(const std::string& path);
 // YAML: model, effects, parameters {name: {value, sigma, unit}}, and the covariance.

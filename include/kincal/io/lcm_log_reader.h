@@ -49,6 +49,7 @@ class LcmLogReader {
   void Rewind();
 
   const std::string& path() const { return path_; }
+  int64_t size() const { return size_; }  // bytes
   int64_t damaged_bytes() const { return damaged_bytes_; }
   // Damaged stretches skipped, plus one for a last event cut short.
   int64_t damaged_stretches() const { return damaged_stretches_; }

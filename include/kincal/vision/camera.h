@@ -9,6 +9,8 @@
 #include <Eigen/Dense>
 #include <string>
 
+#include "kincal/status.h"
+
 namespace kincal::vision {
 
 struct CameraModel {
@@ -30,6 +32,7 @@ struct CameraModel {
 // OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width,
 // image_height. Throws std::runtime_error naming the file and the missing key.
 CameraModel ReadCameraYaml(const std::string& path);
-void WriteCameraYaml(const CameraModel& cam, const std::string& path);
+// Written whole or not at all (kincal/io/output_file.h); an error names the file.
+Status WriteCameraYaml(const CameraModel& cam, const std::string& path);
 
 }  // namespace kincal::vision
