@@ -9,7 +9,14 @@ kincald=$1 python=$2 types=$3 config=$4 work=$5
 rm -rf "$work" && mkdir -p "$work"
 "$kincald" --config "$config" --lcm-url memq:// --record "$work/killed.lcm" --checkpoint "$work/ck.json" -q &
 pid=$!
-sleep 4
+# Killed once the log holds 60 frames' worth and the first checkpoint exists (polled, not a
+# fixed sleep: a loaded machine or a sanitizer build runs slower), at most 120 s.
+want=$((60 * (640 * 480 + 200)))
+for _ in $(seq 600); do
+  size=$(stat -c %s "$work/killed.lcm" 2>/dev/null || echo 0)
+  if ((size >= want)) && [ -f "$work/ck.json" ]; then break; fi
+  sleep 0.2
+done
 kill -KILL "$pid"
 wait "$pid" 2>/dev/null || true
 "$python" - "$types" "$work/killed.lcm" "$work/ck.json" <<'PY'
