@@ -5,6 +5,7 @@
 #include "kincal/analysis/analyze.h"
 
 #include <algorithm>
+#include <sstream>
 
 #include "analysis/baseline_fit.h"
 #include "analysis/evaluation.h"
@@ -14,6 +15,57 @@
 #include "kincal/system.h"
 
 namespace kincal {
+
+namespace {
+
+// The model must beat the better command-blind guess by this factor to explain the motion.
+constexpr double kExplainsFraction = 0.8;
+// Guesses closer than this many pose sigmas leave nothing to judge by, unless the commands
+// asked for motion in at least this fraction of the held-out windows (then a model that
+// does no better than standing still has missed what the commands did).
+constexpr double kJudgeableSigmas = 5.0;
+constexpr double kCommandedFraction = 0.5;
+
+// The fraction of held-out windows that start with a non-zero command.
+double CommandedFraction(const analysis::Dataset& d) {
+  int commanded = 0, n = 0;
+  for (const auto& w : d.eval) {
+    const double ts = d.t[static_cast<size_t>(w.start)];
+    if (ts < d.t_split) continue;
+    const auto& u = d.rec->controls.At(ts);
+    commanded += std::any_of(u.begin(), u.begin() + d.rec->controls.num_channels(),
+                             [](double v) { return v != 0.0; });
+    ++n;
+  }
+  return n > 0 ? static_cast<double>(commanded) / n : 0.0;
+}
+
+GoodnessOfFit Judge(const analysis::Dataset& d, double model_m) {
+  GoodnessOfFit g;
+  g.model_m = model_m;
+  analysis::NaiveHeldOut(d, &g.standstill_m, &g.constant_velocity_m);
+  const double guess = std::min(g.standstill_m, g.constant_velocity_m);
+  g.judged = guess > kJudgeableSigmas * d.sigma[0] || CommandedFraction(d) >= kCommandedFraction;
+  g.explains = !g.judged || model_m < kExplainsFraction * guess;
+  std::ostringstream m;
+  m.precision(3);
+  if (!g.judged) {
+    m << "the robot was hardly commanded and hardly moved over a horizon (" << guess
+      << " m): the fit cannot be told from a guess that ignores the commands";
+  } else if (!g.explains) {
+    m << "the model explains nothing: its held-out error (" << model_m
+      << " m at the horizon) is no better than "
+      << (g.standstill_m <= g.constant_velocity_m ? "standing still (" : "constant velocity (")
+      << guess << " m); check that the controls drive this robot and that the poses are its";
+  } else {
+    m << "the model predicts " << guess / std::max(model_m, 1e-12)
+      << "x better than a guess that ignores the commands";
+  }
+  g.verdict = m.str();
+  return g;
+}
+
+}  // namespace
 
 bool AnalyzeOptions::IsValid(std::string* error) const {
   if (!(fit_fraction > 0.05 && fit_fraction < 0.95)) {
@@ -166,6 +218,14 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.after = analysis::MakeReport(final_sys, current.fit, current.eval, accepted, fit_windows);
   res.diagnosis_after = current.diagnosis;
   res.tests_after = analysis::TestResiduals(current.eval, o.horizon_s);
+  res.goodness = Judge(d, res.after.heldout.pos_rms_m);
+  if (res.goodness.judged && !res.goodness.explains) {
+    res.warnings.push_back(res.goodness.verdict);
+    for (FitReport* f : {&res.before, &res.after}) {
+      f->unique = false;
+      f->uniqueness = res.goodness.verdict;
+    }
+  }
   progress(1.0, "done");
   return res;
 }

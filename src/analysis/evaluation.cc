@@ -57,6 +57,28 @@ Evaluation Evaluate(const System& sys, const Eigen::VectorXd& p, const Dataset& 
   return e;
 }
 
+void NaiveHeldOut(const Dataset& d, double* standstill_m, double* constant_velocity_m) {
+  double still = 0.0, moving = 0.0;
+  int n = 0;
+  for (const auto& w : d.eval) {
+    const double ts = d.t[static_cast<size_t>(w.start)], te = d.t[static_cast<size_t>(w.end)];
+    if (ts < d.t_split) continue;
+    // The pose about one horizon earlier: the velocity over the previous horizon.
+    const auto prev = std::lower_bound(d.t.begin(), d.t.begin() + w.start, ts - d.horizon);
+    const int k = static_cast<int>(prev - d.t.begin());
+    if (k >= w.start) continue;
+    const Eigen::Vector2d zs = d.rec->poses[static_cast<size_t>(w.start)].z.head<2>();
+    const Eigen::Vector2d ze = d.rec->poses[static_cast<size_t>(w.end)].z.head<2>();
+    const Eigen::Vector2d zk = d.rec->poses[static_cast<size_t>(k)].z.head<2>();
+    const Eigen::Vector2d v = (zs - zk) / (ts - d.t[static_cast<size_t>(k)]);
+    still += (ze - zs).squaredNorm();
+    moving += (ze - zs - v * (te - ts)).squaredNorm();
+    ++n;
+  }
+  *standstill_m = n > 0 ? std::sqrt(still / n) : 0.0;
+  *constant_velocity_m = n > 0 ? std::sqrt(moving / n) : 0.0;
+}
+
 double Combined(const ErrorStats& s, const Eigen::Vector2d& sigma) {
   return std::sqrt(s.pos_rms_m * s.pos_rms_m / (2.0 * sigma[0] * sigma[0]) +
                    s.heading_rms_rad * s.heading_rms_rad / (sigma[1] * sigma[1]));

@@ -156,6 +156,12 @@ Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   j["diagnosis"] = {{"before", DiagJson(r.diagnosis_before, 12)},
                     {"after", DiagJson(r.diagnosis_after, 12)}};
   j["tests"] = {{"before", TestsJson(r.tests_before)}, {"after", TestsJson(r.tests_after)}};
+  j["goodness_of_fit"] = {{"model_heldout_m", r.goodness.model_m},
+                          {"standstill_m", r.goodness.standstill_m},
+                          {"constant_velocity_m", r.goodness.constant_velocity_m},
+                          {"judged", r.goodness.judged},
+                          {"explains_motion", r.goodness.explains},
+                          {"verdict", r.goodness.verdict}};
   j["warnings"] = r.warnings;
   j["input"] = {{"control_rows", r.stats.control_rows},
                 {"pose_rows", r.stats.pose_rows},

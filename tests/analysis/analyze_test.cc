@@ -241,6 +241,7 @@ TEST(Rates, DefaultsWorkFromTwoHertzToOneKilohertz) {
       ADD_FAILURE() << r.pose_hz << " Hz poses, " << r.control_hz << " Hz controls: " << e.what();
       continue;
     }
+    EXPECT_TRUE(res.goodness.judged && res.goodness.explains) << res.goodness.verdict;
     const double truth[2] = {0.9, 0.8};
     for (size_t i = 0; i < 2; ++i) {
       const auto& p = res.before.params[i];
@@ -248,6 +249,32 @@ TEST(Rates, DefaultsWorkFromTwoHertzToOneKilohertz) {
           << p.name << " at " << r.pose_hz << " Hz poses, " << r.control_hz << " Hz controls";
     }
   }
+}
+
+// Reproduces issue 16 (item 10): rows of uniform random numbers gave k_v -1.55 +- 2.57,
+// "unique", and no warning that the model explains nothing.
+TEST(GoodnessOfFit, RandomNumbersAreSaidToBeExplainedByNothing) {
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Recording rec;
+  rec.source = "random numbers";
+  rec.controls = ControlSignal(2, 0);
+  for (int k = 0; k < 3000; ++k) {
+    const double t = 0.1 * k;
+    const std::array<double, 2> c = {u(rng), u(rng)};
+    rec.controls.Append(SecondsToNs(t), c);
+    rec.poses.push_back({SecondsToNs(t), Eigen::Vector3d(u(rng), u(rng), u(rng))});
+  }
+  AnalyzeOptions o;
+  o.model = "unicycle";
+  o.effects_mode = "none";
+  const AnalyzeResult r = Analyze(rec, o);
+  EXPECT_TRUE(r.goodness.judged) << r.goodness.verdict;
+  EXPECT_FALSE(r.goodness.explains) << r.goodness.verdict;
+  EXPECT_FALSE(r.after.unique);
+  EXPECT_NE(r.goodness.verdict.find("the model explains nothing"), std::string::npos);
+  ASSERT_FALSE(r.warnings.empty());
+  EXPECT_EQ(r.warnings.back(), r.goodness.verdict);
 }
 
 TEST(Identifiability, UnobservableParameterIsNamedWithTheMotionThatExcitesIt) {

@@ -102,6 +102,20 @@ struct EffectTrial {
   std::string evidence;
 };
 
+// Does the model explain the motion at all? Its held-out prediction error against two
+// guesses that know nothing of the commands: standing still, and going on at the velocity
+// of the previous horizon. A model no better than the better guess explains nothing (the
+// controls do not drive it, or the data are not a robot's motion); then no estimate of it
+// is unique.
+struct GoodnessOfFit {
+  double model_m = 0.0;              // held-out position RMS at the horizon, the final model
+  double standstill_m = 0.0;         // ... predicting that the robot stays where it is
+  double constant_velocity_m = 0.0;  // ... extrapolating the previous horizon's velocity
+  bool judged = false;   // false: the motion is too small against the pose noise to judge
+  bool explains = true;  // the model beats the better guess clearly
+  std::string verdict;
+};
+
 struct AnalyzeResult {
   std::string model;
   std::string source;
@@ -110,6 +124,7 @@ struct AnalyzeResult {
   double t_begin_s = 0, t_split_s = 0, t_end_s = 0;
   double horizon_s = 1.0;
   FitReport before, after;
+  GoodnessOfFit goodness;
   std::vector<EffectTrial> trials;
   std::vector<DiagnosisTerm> diagnosis_before, diagnosis_after;
   ResidualTests tests_before, tests_after;
