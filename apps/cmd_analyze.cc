@@ -11,28 +11,26 @@
 
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
-#include "kincal/effect.h"
+#include "kincal/analysis/option_lists.h"
 
 namespace kincal::app {
 namespace {
 
-std::map<std::string, double> ParseInit(const std::string& text) {
-  std::map<std::string, double> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    const auto eq = item.find('=');
-    if (eq == std::string::npos)
-      throw std::runtime_error("--init: expected name=value, got '" + item + "'");
-    const std::string value = item.substr(eq + 1);
-    double v = 0.0;
-    const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
-    if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) {
-      throw std::runtime_error("--init: '" + value + "' is not a number (in '" + item + "')");
-    }
-    out[item.substr(0, eq)] = v;
+// "pos_m,heading_rad": two finite numbers > 0.
+Eigen::Vector2d ParsePoseSigma(const std::string& text) {
+  Eigen::Vector2d v(0, 0);
+  const size_t comma = text.find(',');
+  for (int i = 0; i < 2 && comma != std::string::npos; ++i) {
+    const char* begin = text.data() + (i == 0 ? 0 : comma + 1);
+    const char* end = text.data() + (i == 0 ? comma : text.size());
+    const auto [stop, ec] = std::from_chars(begin, end, v[i]);
+    if (ec != std::errc() || stop != end || !std::isfinite(v[i])) v[i] = 0;
   }
-  return out;
+  if (!(v[0] > 0) || !(v[1] > 0)) {
+    throw std::runtime_error("--pose-sigma '" + text +
+                             "': expected 'pos_m,heading_rad', two numbers > 0");
+  }
+  return v;
 }
 
 // Finds scripts/plot_analysis.py: $KINCAL_SCRIPTS, the source tree, or the install tree.
@@ -87,40 +85,19 @@ Command AddAnalyze(CLI::App& app) {
     }
     if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
     o.model = a->model;
-    o.init = a->init.empty() ? std::map<std::string, double>{} : ParseInit(a->init);
+    if (const Status s = ParseInitList(a->init, &o.init); !s.ok()) {
+      throw std::runtime_error(s.message());
+    }
     if (a->effects == "auto" || a->effects == "none") {
       o.effects_mode = a->effects;
     } else {
       o.effects_mode = "list";
-      std::string cur;
-      int depth = 0;
-      for (char c : a->effects + ",") {
-        if (c == '[') ++depth;
-        if (c == ']') --depth;
-        if (c == ',' && depth == 0) {
-          if (!cur.empty()) o.effects.push_back(cur);
-          cur.clear();
-        } else {
-          cur += c;
-        }
-      }
-      if (depth != 0 || !cur.empty()) {
-        throw std::runtime_error("--effects '" + a->effects +
-                                 "': unbalanced brackets (expected name or name[channel,...], "
-                                 "separated by commas)");
-      }
-      for (const auto& spec : o.effects) {
-        EffectSpec parsed;
-        if (const Status s = ParseEffectSpec(spec, &parsed); !s.ok())
-          throw std::runtime_error("--effects: " + s.message());
+      if (const Status s = ParseEffectList(a->effects, &o.effects); !s.ok()) {
+        throw std::runtime_error(s.message());
       }
     }
     if (!a->pose_sigma.empty()) {
-      const auto comma = a->pose_sigma.find(',');
-      if (comma == std::string::npos)
-        throw std::runtime_error("--pose-sigma: expected 'pos_m,heading_rad'");
-      o.pose_sigma = Eigen::Vector2d(std::stod(a->pose_sigma.substr(0, comma)),
-                                     std::stod(a->pose_sigma.substr(comma + 1)));
+      o.pose_sigma = ParsePoseSigma(a->pose_sigma);
     }
     const auto model = MakeModel(o.model);
     Recording rec;
@@ -198,6 +175,10 @@ Command AddAnalyze(CLI::App& app) {
     if (!r.before.unique)
       std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
     for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
+    std::cout << "goodness of fit: " << r.goodness.verdict << "\n";
+    if (r.goodness.judged && !r.goodness.explains) {
+      std::cerr << "kincal analyze: " << r.goodness.verdict << "\n";
+    }
     std::cout << "wrote " << a->out << "/report.json, report.html, residuals.csv\n";
     return 0;
   };

@@ -30,11 +30,19 @@ std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, con
     if (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".bmp" || ext == ".pgm")
       files.push_back(e.path());
   }
+  if (files.empty()) {
+    throw std::runtime_error(dir +
+                             ": no images in the folder (expected .png, .jpg, .jpeg, .bmp or "
+                             ".pgm files)");
+  }
   std::sort(files.begin(), files.end());
   std::vector<vision::CalibrationView> views;
   for (const auto& f : files) {
     const cv::Mat img = cv::imread(f.string(), cv::IMREAD_GRAYSCALE);
-    if (img.empty()) throw std::runtime_error(f.string() + ": unreadable image");
+    if (img.empty()) {
+      throw std::runtime_error(f.string() + ": unreadable image, or larger than " +
+                               std::to_string(kMaxImagePixels) + " pixels");
+    }
     if (*w == 0) {
       *w = img.cols;
       *h = img.rows;

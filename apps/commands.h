@@ -10,6 +10,10 @@ namespace kincal::app {
 
 using Command = std::function<int()>;
 
+// The largest image the tool decodes (pixels); main() hands it to OpenCV's decoders
+// (OPENCV_IO_MAX_IMAGE_PIXELS), so that a huge image is refused before it is decompressed.
+inline constexpr long kMaxImagePixels = 64L << 20;
+
 // Writes a tool's output whole or not at all (kincal/io/output_file.h); throws
 // std::runtime_error with the status's message, which main() prints before exiting 1.
 void WriteOutput(const std::string& path, const std::string& text, const char* what);

@@ -1,7 +1,9 @@
 // kincal: the calibration tool. Thin front end over kincal::core; see `kincal --help`.
+#include <cstdlib>
 #include <exception>
 #include <iostream>
 #include <map>
+#include <string>
 
 #include "commands.h"
 #include "kincal/effect.h"
@@ -9,6 +11,9 @@
 #include "kincal/model.h"
 
 int main(int argc, char** argv) {
+  // Before any image is decoded: OpenCV reads its limit once (an environment setting the
+  // user made wins).
+  setenv("OPENCV_IO_MAX_IMAGE_PIXELS", std::to_string(kincal::app::kMaxImagePixels).c_str(), 0);
   CLI::App app{"kincal: kinematic calibration of mobile robots from camera poses"};
   app.require_subcommand(1);
   std::map<CLI::App*, kincal::app::Command> commands;

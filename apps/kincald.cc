@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "kincal/analysis/option_lists.h"
 #include "kincal/daemon/daemon.h"
 
 #ifndef KINCAL_INSTALL_DATADIR
@@ -73,7 +74,7 @@ int main(int argc, char** argv) {
                  "write checkpoints (and the final estimate) to this file");
   app.add_flag("--resume-if-present", resume_if_present,
                "resume from the --checkpoint file when it exists (services)");
-  app.add_option("--duration", duration, "simulation length in seconds (source: sim)");
+  auto* dur = app.add_option("--duration", duration, "simulation length in seconds (source: sim)");
   std::string effects;
   app.add_option("--effects", effects,
                  "robot effects: 'auto' (found and added online), 'none', or specs separated by "
@@ -108,15 +109,26 @@ int main(int argc, char** argv) {
       cfg.replay.speed = fast ? 0.0 : (sp->count() ? speed : cfg.replay.speed);
     if (cfg.source == kincal::daemon::SourceKind::kSim)
       cfg.sim.speed = fast ? 0.0 : (sp->count() ? speed : cfg.sim.speed);
-    if (duration > 0) cfg.sim.duration_s = duration;
+    if (dur->count()) {
+      if (!(duration > 0 && duration <= kincal::daemon::kMaxSimDurationS)) {
+        throw std::runtime_error(
+            "--duration: expected seconds > 0 and at most " +
+            std::to_string(static_cast<int>(kincal::daemon::kMaxSimDurationS)) + " (a day)");
+      }
+      cfg.sim.duration_s = duration;
+    }
     if (!effects.empty()) {
       cfg.robot.effects.clear();
       cfg.robot.auto_effects = false;
-      std::stringstream list(effects == "none" ? "" : effects);
-      for (std::string e; std::getline(list, e, ',');) {
+      std::vector<std::string> list;
+      if (const kincal::Status s = kincal::ParseEffectList(effects == "none" ? "" : effects, &list);
+          !s.ok()) {
+        throw std::runtime_error(s.message());
+      }
+      for (const std::string& e : list) {
         if (e == "auto") {
           cfg.robot.auto_effects = true;
-        } else if (!e.empty()) {
+        } else {
           cfg.robot.effects.push_back(e);
         }
       }

@@ -6,7 +6,8 @@
 // controls (one kincal.controls_t as the daemon's handler sees it), lcm_messages (params_t
 // as `kincal export` reads it, frame_t and pose_t), csv (kincal's CSV recording reader),
 // mrclam (the MR.CLAM reader), yaml (daemon config, scenario, target layout), checkpoint
-// (JSON checkpoints), frame (pixel decoding: raw, YUYV, packed colour, MJPEG, PNG).
+// (JSON checkpoints, validated: extreme values, bad covariances), frame (pixel decoding:
+// raw, YUYV, packed colour, MJPEG, PNG), lists (--init and --effects text).
 // libFuzzer ignores flags starting with "--"; the harness reads --target itself.
 // Expected failures (the readers' documented exceptions) are fine; crashes, sanitizer
 // reports, leaks and hangs are not.
@@ -24,10 +25,14 @@
 #include <kincal/frame_t.hpp>
 #include <kincal/params_t.hpp>
 #include <kincal/pose_t.hpp>
+#include <map>
 #include <string>
+#include <string_view>
+#include <vector>
 
 #include "daemon/control_input.h"
 #include "daemon/sources.h"
+#include "kincal/analysis/option_lists.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
@@ -35,6 +40,7 @@
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
 #include "kincal/scenario.h"
+#include "kincal/system.h"
 #include "kincal/vision/setup_files.h"
 
 namespace {
@@ -140,6 +146,20 @@ void FuzzCheckpoint(const uint8_t* data, size_t size) {
   Expect([&] { kincal::daemon::ReadCheckpoint(path); });
 }
 
+void FuzzLists(const uint8_t* data, size_t size) {
+  const std::string_view text(reinterpret_cast<const char*>(data), size);
+  std::map<std::string, double> init;
+  std::vector<std::string> effects;
+  (void)kincal::ParseInitList(text, &init);
+  if (kincal::ParseEffectList(text, &effects).ok()) {
+    // Every spec the list accepts is one ParseEffectSpec accepts: try binding it.
+    for (const auto& e : effects) {
+      std::unique_ptr<kincal::System> sys;
+      (void)kincal::MakeSystem("diffdrive", {e}, {}, &sys);
+    }
+  }
+}
+
 void FuzzFrame(const uint8_t* data, size_t size) {
   if (size < 6) return;
   kincal::daemon::Frame f;
@@ -161,7 +181,7 @@ extern "C" int LLVMFuzzerInitialize(int* argc, char*** argv) {
   if (g_target.empty()) {
     std::fprintf(stderr,
                  "kincal_fuzz: give "
-                 "--target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame\n");
+                 "--target=lcm_log|controls|lcm_messages|csv|mrclam|yaml|checkpoint|frame|lists\n");
     std::exit(2);
   }
   // The library's warnings (e.g. replay naming each damaged stretch) would flood the
@@ -194,6 +214,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     FuzzCheckpoint(data, size);
   else if (g_target == "frame")
     FuzzFrame(data, size);
+  else if (g_target == "lists")
+    FuzzLists(data, size);
   else {
     std::fprintf(stderr, "kincal_fuzz: unknown target '%s'\n", g_target.c_str());
     std::exit(2);

@@ -5,14 +5,14 @@ written, or whose input or option is bad, exits non-zero with a message naming t
 field or option and what was expected. Each row: a command, the exit code expected (0 or
 non-zero), a text its output must contain, and checks on the files afterwards.
 
-usage: check_hostile.py KINCAL SOURCE_DIR SCRATCH_DIR
+usage: check_hostile.py KINCAL SOURCE_DIR SCRATCH_DIR KINCALD
 """
 import os
 import shutil
 import subprocess
 import sys
 
-kincal, source, scratch = sys.argv[1], sys.argv[2], sys.argv[3]
+kincal, source, scratch, kincald = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4]
 shutil.rmtree(scratch, ignore_errors=True)
 os.makedirs(scratch)
 victim = os.path.join(scratch, "victim.txt")
@@ -32,8 +32,8 @@ def victim_intact():
         return f.read() == "precious"
 
 
-def run(name, args, ok, text=None, check=None, env=None):
-    p = subprocess.run([kincal] + args, capture_output=True, text=True, env=env, timeout=600)
+def run(name, args, ok, text=None, check=None, env=None, program=None):
+    p = subprocess.run([program or kincal] + args, capture_output=True, text=True, env=env, timeout=600)
     out = p.stdout + p.stderr
     problems = []
     if (p.returncode == 0) != ok:
@@ -59,7 +59,7 @@ bad_inputs = [
     ("analyze --threads 0", csv + ["--threads", "0"], "--threads must be >= 1"),
     ("analyze --threads -5", csv + ["--threads", "-5"], "--threads must be >= 1"),
     ("analyze --max-effects -1", csv + ["--max-effects", "-1"], "--max-effects must be >= 0"),
-    ("analyze --init k_v=nan", csv + ["--init", "k_v=nan"], "'nan' is not a number"),
+    ("analyze --init k_v=nan", csv + ["--init", "k_v=nan"], "'nan' is not a finite number"),
     ("analyze --effects with a broken spec", csv + ["--effects", "dead_band[v"], "dead_band[v"),
     ("analyze a directory as controls", ["--controls", scratch, "--poses", f"{sim}/poses.csv"],
      "is a directory, expected a text file"),
@@ -73,6 +73,36 @@ results.append(run("camcal --image-size 99999999999x480",
                    ["camcal", "--points", f"{source}/tests/data/calib_points.csv", "--image-size",
                     "99999999999x480", "--out", f"{scratch}/c.yaml"], False,
                    "each side must be 1 to 65535 pixels"))
+
+# camcal --images: an empty folder, and an image of 20000 x 20000 pixels (a 2.3 GB decode).
+empty_dir = os.path.join(scratch, "no_images")
+os.makedirs(empty_dir)
+results.append(run("camcal --images on an empty folder",
+                   ["camcal", "--images", empty_dir, "--board", "chessboard:9x6:0.025", "--out", f"{scratch}/e.yaml"],
+                   False, "no images in the folder"))
+huge_dir = os.path.join(scratch, "huge_image")
+os.makedirs(huge_dir)
+import struct
+import zlib
+def chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff)
+with open(os.path.join(huge_dir, "huge.png"), "wb") as f:  # a valid header, a tiny body
+    f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", 20000, 20000, 8, 0, 0, 0, 0)) +
+            chunk(b"IDAT", zlib.compress(b"\0" * 20001)) + chunk(b"IEND", b""))
+results.append(run("camcal --images with a 20000x20000 PNG",
+                   ["camcal", "--images", huge_dir, "--board", "chessboard:9x6:0.025", "--out", f"{scratch}/h.yaml"],
+                   False, "larger than 67108864 pixels"))
+
+# kincald: a simulated run's length is bounded and must be a number of seconds.
+for value in ["-5", "nan", "1e10"]:
+    results.append(run(f"kincald --duration {value}", ["--duration", value, "--fast", "--lcm-url", "memq://"],
+                       False, "--duration: expected seconds > 0", program=kincald))
+empty_log = os.path.join(scratch, "empty.lcm")
+open(empty_log, "w").close()
+results.append(run("kincald --replay of an empty log", ["--replay", empty_log, "--fast", "--lcm-url", "memq://"],
+                   False, "the log is empty (0 bytes)", program=kincald))
+results.append(run("kincald --replay of a directory", ["--replay", scratch, "--fast", "--lcm-url", "memq://"],
+                   False, "is a directory, expected an LCM log file", program=kincald))
 
 # analyze: links planted at every output and at the temporaries are replaced, never followed.
 out = os.path.join(scratch, "analysis")

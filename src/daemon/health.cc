@@ -50,7 +50,14 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
 
   Problems p;
   if (!s.source_error.empty()) p.Add("source: " + s.source_error);
-  if (now.frames_bad > prev_.frames_bad) p.Add("bad frames: " + s.last_frame_error);
+  if (now.frames_bad > prev_.frames_bad) {
+    // A frame the detector could not use says why; events the source itself could not
+    // decode (a damaged or foreign log) have no frame to speak of.
+    p.Add("bad frames: " + (s.last_frame_error.empty()
+                                ? std::to_string(now.frames_bad - prev_.frames_bad) +
+                                      " the source could not decode (damaged or foreign data)"
+                                : s.last_frame_error));
+  }
   if (!s.source_done && s.since_last_frame_ns > kNoFramesNs) p.Add("no frames for 2 s");
   if (now.frames_dropped_queue > prev_.frames_dropped_queue) {
     p.Add("frame queue full: detection is too slow");

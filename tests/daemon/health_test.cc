@@ -26,6 +26,25 @@ TEST(Health, EveryCounterIsPublishedWhole) {
 #undef KINCAL_CHECK_FIELD
 }
 
+// Reproduces issue 16 (item 13): health said "bad frames: " with no reason when the source
+// itself rejected what it read.
+TEST(Health, BadFramesAlwaysSayWhy) {
+  HealthReporter r;
+  HealthStatus s;
+  DaemonCounters c;
+  kincal::health_t h;
+  r.Build(c, s, 1.0, 1, &h);
+  c.frames_bad = 3;
+  r.Build(c, s, 1.0, 2, &h);
+  EXPECT_NE(h.message.find("bad frames: 3 the source could not decode"), std::string::npos)
+      << h.message;
+  c.frames_bad = 4;
+  s.last_frame_error = "MJPG frame: header declares 10x10, expected 640x480";
+  r.Build(c, s, 1.0, 3, &h);
+  EXPECT_NE(h.message.find("bad frames: MJPG frame: header declares"), std::string::npos)
+      << h.message;
+}
+
 TEST(Health, QueueDropsAreNamedInThePeriodTheyHappen) {
   HealthReporter r;
   HealthStatus s;

@@ -59,6 +59,9 @@ struct LibcameraOptions {
   bool IsValid(std::string* error) const;
 };
 
+// The longest simulated run (s): its commands and frame times are made at start.
+inline constexpr double kMaxSimDurationS = 86400.0;
+
 struct SimOptions {
   std::string scenario = "sim_diffdrive.yaml";  // robot, truth, controls (as `kincal simulate`)
   double speed = 1.0;       // simulated seconds per wall-clock second; <= 0: as fast as possible

@@ -1,0 +1,67 @@
+#include "kincal/analysis/option_lists.h"
+
+#include <charconv>
+#include <cmath>
+
+#include "kincal/effect.h"
+
+namespace kincal {
+
+Status ParseInitList(std::string_view text, std::map<std::string, double>* out) {
+  out->clear();
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string_view item = text.substr(start, comma - start);
+    start = comma + 1;
+    if (item.empty()) continue;
+    const size_t eq = item.find('=');
+    if (eq == std::string_view::npos || eq == 0) {
+      return Status::Error("--init: expected name=value, got '" + std::string(item) + "'");
+    }
+    const std::string_view value = item.substr(eq + 1);
+    double v = 0.0;
+    const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
+    if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) {
+      return Status::Error("--init: '" + std::string(value) + "' is not a finite number (in '" +
+                           std::string(item) + "')");
+    }
+    if (!out->emplace(std::string(item.substr(0, eq)), v).second) {
+      return Status::Error("--init: '" + std::string(item.substr(0, eq)) + "' is given twice");
+    }
+  }
+  return {};
+}
+
+Status ParseEffectList(std::string_view text, std::vector<std::string>* out) {
+  out->clear();
+  std::string cur;
+  int depth = 0;
+  for (const char c : text) {
+    if (c == '[') ++depth;
+    if (c == ']' && --depth < 0) break;
+    if (c == ',' && depth == 0) {
+      if (!cur.empty()) out->push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (depth != 0) {
+    out->clear();
+    return Status::Error("--effects '" + std::string(text) +
+                         "': unbalanced brackets (expected name or name[channel,...], separated "
+                         "by commas)");
+  }
+  if (!cur.empty()) out->push_back(cur);
+  for (const auto& spec : *out) {
+    EffectSpec parsed;
+    if (const Status s = ParseEffectSpec(spec, &parsed); !s.ok()) {
+      out->clear();
+      return Status::Error("--effects: " + s.message());
+    }
+  }
+  return {};
+}
+
+}  // namespace kincal
