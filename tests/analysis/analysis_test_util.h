@@ -13,6 +13,22 @@
 
 namespace kincal::testing {
 
+// The recording of `sys` at parameters p driven by `controls` for duration_s: poses at
+// `pose_hz` with 1 mm / 3 mrad noise, starting at (0, 0, 0.3).
+inline Recording Observe(const System& sys, const VecN<kMaxState>& p, ControlSignal controls,
+                         double duration_s, double pose_hz, std::mt19937_64& rng) {
+  Recording rec;
+  rec.source = "simulated unicycle";
+  rec.controls = std::move(controls);
+  const TimeNs t1 = SecondsToNs(duration_s);
+  const auto times = FrameTimes(0, t1, FrameTimingOptions{pose_hz, 0.0, 0.0, 0.0}, rng);
+  const StateVec x0 = sys.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
+  const auto traj = SimulateTruth(sys, x0, rec.controls, times);
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
+  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
+  return rec;
+}
+
 inline Recording UnicycleRecording(double duration_s, const std::vector<std::string>& hidden,
                                    const std::map<std::string, double>& truth, uint64_t seed) {
   const System sys = MakeSystem("unicycle", hidden);
@@ -20,18 +36,10 @@ inline Recording UnicycleRecording(double duration_s, const std::vector<std::str
   values.insert(truth.begin(), truth.end());
   const VecN<kMaxState> p = ParamsFrom(sys, values, "truth");
   std::mt19937_64 rng(seed);
-  Recording rec;
-  rec.source = "simulated unicycle";
-  rec.controls = ControlSignal(2, 0);
+  ControlSignal u(2, 0);
   const std::array<double, 2> lo = {-0.2, -1.0}, hi = {0.8, 1.0};
-  const TimeNs t1 = SecondsToNs(duration_s);
-  AppendPiecewiseRandom(&rec.controls, 0, t1, lo, hi, 0.7, 2.5, rng);
-  const auto times = FrameTimes(0, t1, FrameTimingOptions{20.0, 0.0, 0.0, 0.0}, rng);
-  const StateVec x0 = sys.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
-  const auto traj = SimulateTruth(sys, x0, rec.controls, times);
-  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
-  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
-  return rec;
+  AppendPiecewiseRandom(&u, 0, SecondsToNs(duration_s), lo, hi, 0.7, 2.5, rng);
+  return Observe(sys, p, std::move(u), duration_s, 20.0, rng);
 }
 
 // A clean unicycle (k_v 0.9, k_omega 0.8) under smooth random commands sampled at
@@ -42,18 +50,10 @@ inline Recording UnicycleAtRates(double duration_s, double pose_hz, double contr
   VecN<kMaxState> p(2);
   p << 0.9, 0.8;
   std::mt19937_64 rng(seed);
-  Recording rec;
-  rec.source = "simulated unicycle";
-  rec.controls = ControlSignal(2, 0);
+  ControlSignal u(2, 0);
   const std::array<double, 2> lo = {-0.2, -1.0}, hi = {0.8, 1.0};
-  const TimeNs t1 = SecondsToNs(duration_s);
-  AppendSmoothRandom(&rec.controls, 0, t1, lo, hi, 2.0, control_hz, rng);
-  const auto times = FrameTimes(0, t1, FrameTimingOptions{pose_hz, 0.0, 0.0, 0.0}, rng);
-  const StateVec x0 = sys.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
-  const auto traj = SimulateTruth(sys, x0, rec.controls, times);
-  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
-  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
-  return rec;
+  AppendSmoothRandom(&u, 0, SecondsToNs(duration_s), lo, hi, 2.0, control_hz, rng);
+  return Observe(sys, p, std::move(u), duration_s, pose_hz, rng);
 }
 
 }  // namespace kincal::testing

@@ -18,7 +18,8 @@ TEST(BaselineFit, GuessesFiveTimesOffReachTheTruth) {
   const Dataset d = Prepare(rec, o, &warnings);
   const System sys = MakeSystem("unicycle");
   for (const double factor : {5.0, 0.2}) {
-    const Eigen::VectorXd p0 = InitialParams(sys, {{"k_v", 0.9 * factor}, {"k_omega", 0.8 * factor}});
+    const Eigen::VectorXd p0 =
+        InitialParams(sys, {{"k_v", 0.9 * factor}, {"k_omega", 0.8 * factor}});
     FitReport report;
     const Fit f = FitBaseline(sys, d, p0, o, &report);
     ASSERT_TRUE(f.ok) << factor;

@@ -21,7 +21,8 @@ TEST(OptionLists, InitValuesByName) {
 
 TEST(OptionLists, EffectsSplitOutsideBracketsAndMustParse) {
   std::vector<std::string> effects;
-  ASSERT_TRUE(ParseEffectList("time_offset,actuator_lag[omega_l,omega_r],lever_arm", &effects).ok());
+  ASSERT_TRUE(
+      ParseEffectList("time_offset,actuator_lag[omega_l,omega_r],lever_arm", &effects).ok());
   EXPECT_EQ(effects, (std::vector<std::string>{"time_offset", "actuator_lag[omega_l,omega_r]",
                                                "lever_arm"}));
   // Reproduces issue 16 (item 13): a malformed list silently tried nothing.

@@ -31,8 +31,7 @@ TEST(Selection, CandidatesAreTheEffectsThatApply) {
 }
 
 TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
-  const Recording rec =
-      testing::UnicycleRecording(90.0, {"time_offset"}, {{"delay_s", 0.25}}, 12);
+  const Recording rec = testing::UnicycleRecording(90.0, {"time_offset"}, {{"delay_s", 0.25}}, 12);
   AnalyzeOptions o;
   o.model = "unicycle";
   std::vector<std::string> warnings;
