@@ -8,22 +8,33 @@ function(kincal_lcm_types target)
   set(py_dir ${CMAKE_BINARY_DIR}/lcmgen/python)
   set(outputs)
   set(sources)
+  set(py_outputs ${py_dir}/kincal/__init__.py)
   foreach(lcm_file ${ARGN})
     get_filename_component(type_name ${lcm_file} NAME_WE)
     set(src ${CMAKE_CURRENT_SOURCE_DIR}/${lcm_file})
     list(APPEND sources ${src})
     set(hpp ${cpp_dir}/kincal/${type_name}.hpp)
-    set(py ${py_dir}/kincal/${type_name}.py)
     add_custom_command(
-      OUTPUT ${hpp} ${py}
-      COMMAND ${CMAKE_COMMAND} -E make_directory ${cpp_dir} ${py_dir}
+      OUTPUT ${hpp}
+      COMMAND ${CMAKE_COMMAND} -E make_directory ${cpp_dir}
       COMMAND ${LCM_GEN} --cpp --cpp-hpath ${cpp_dir} ${src}
-      COMMAND ${LCM_GEN} --python --ppath ${py_dir} ${src}
       DEPENDS ${src}
       COMMENT "lcm-gen ${type_name}"
       VERBATIM)
-    list(APPEND outputs ${hpp} ${py})
+    list(APPEND outputs ${hpp})
+    list(APPEND py_outputs ${py_dir}/kincal/${type_name}.py)
   endforeach()
+  # The Python package in one lcm-gen run: each run appends its type to the package's
+  # __init__.py, and runs in parallel (one per type) raced on it, losing lines.
+  add_custom_command(
+    OUTPUT ${py_outputs}
+    COMMAND ${CMAKE_COMMAND} -E make_directory ${py_dir}
+    COMMAND ${CMAKE_COMMAND} -E rm -f ${py_dir}/kincal/__init__.py
+    COMMAND ${LCM_GEN} --python --ppath ${py_dir} ${sources}
+    DEPENDS ${sources}
+    COMMENT "lcm-gen the Python package"
+    VERBATIM)
+  list(APPEND outputs ${py_outputs})
   add_custom_target(${target}_gen DEPENDS ${outputs})
   add_library(${target} INTERFACE)
   add_dependencies(${target} ${target}_gen)
