@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
       if (!(duration > 0 && duration <= kincal::daemon::kMaxSimDurationS)) {
         throw std::runtime_error(
             "--duration: expected seconds > 0 and at most " +
-            std::to_string(static_cast<int>(kincal::daemon::kMaxSimDurationS)) + " (a day)");
+            std::to_string(static_cast<int64_t>(kincal::daemon::kMaxSimDurationS)) + " (30 days)");
       }
       cfg.sim.duration_s = duration;
     }

@@ -29,9 +29,10 @@ struct FrameTimingOptions {
 // Frame timestamps from t0 while the running sum of intervals (in seconds) is below t1 (a
 // sum a rounding error short of t1 gives a last frame at t1): intervals of 1/rate, plus
 // U(0, jitter_max) with
-// probability jitter_prob; frames dropped with probability dropout_prob.
+// probability jitter_prob; frames dropped with probability dropout_prob. `next`, when given,
+// receives the time of the frame after the last: where a following call continues the stream.
 std::vector<TimeNs> FrameTimes(TimeNs t0, TimeNs t1, const FrameTimingOptions& opt,
-                               std::mt19937_64& rng);
+                               std::mt19937_64& rng, TimeNs* next = nullptr);
 
 // Control profiles (commanded). All append samples to `out` in [t0, t1] and leave a zero
 // sample at t1 (the robot stops).

@@ -198,6 +198,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("duration_s", &c.sim.duration_s);
     s.Get("margin_px", &c.sim.margin_px);
     s.Get("carry_s", &c.sim.carry_s);
+    s.Get("chunk_s", &c.sim.chunk_s);
     s.Get("noise_grey", &c.sim.noise_grey);
     s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
     s.Get("reflection_prob", &c.sim.reflection_prob);
@@ -349,12 +350,12 @@ bool SimOptions::IsValid(std::string* error) const {
   return Expect(!scenario.empty(), "sim.scenario must name a scenario file", error) &&
          Expect(duration_s >= 0 && margin_px >= 0 && carry_s >= 0 && noise_grey >= 0,
                 "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0", error) &&
-         // The simulated run's commands and frame times are made at start: its length
-         // bounds the memory they take (a day: about 150 MB).
          Expect(duration_s <= kMaxSimDurationS,
-                "sim.duration_s must be at most " + std::to_string(kMaxSimDurationS) +
-                    " s (a day); 0 takes the scenario's",
+                "sim.duration_s must be at most " +
+                    std::to_string(static_cast<int64_t>(kMaxSimDurationS)) +
+                    " s (30 days); 0 takes the scenario's",
                 error) &&
+         Expect(chunk_s >= 1.0 && chunk_s <= 3600.0, "sim.chunk_s must be in [1, 3600] s", error) &&
          Expect(reflection_prob >= 0 && reflection_prob <= 1 && occlusion_prob >= 0 &&
                     occlusion_prob <= 1,
                 "sim.reflection_prob and occlusion_prob must be in [0, 1]", error);

@@ -1,4 +1,5 @@
 // The simulated camera: a scenario's robot rendered through the synthetic camera.
+#include <algorithm>
 #include <chrono>
 #include <kincal/controls_t.hpp>
 #include <numbers>
@@ -39,19 +40,11 @@ class SimSource final : public FrameSource {
                                " values");
     }
     p_true_ = ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth");
-    const double duration = c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s;
-    const TimeNs t1 = SecondsToNs(duration);
-    cmd_ = ControlSignal(nc, 0);
-    if (sc_.profile == "smooth") {
-      AppendSmoothRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s,
-                         sc_.control_rate_hz, rng_);
-    } else if (sc_.profile == "piecewise") {
-      AppendPiecewiseRandom(&cmd_, 0, t1, sc_.control_low, sc_.control_high, sc_.min_period_s,
-                            3.0 * sc_.min_period_s, rng_);
-    } else {
+    if (sc_.profile != "smooth" && sc_.profile != "piecewise")
       throw std::runtime_error(c.sim.scenario + ": controls.profile must be smooth or piecewise");
-    }
-    times_ = FrameTimes(0, t1, sc_.camera, rng_);
+    end_ = SecondsToNs(c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s);
+    cmd_ = ControlSignal(nc, 0);
+    NextChunk();
     x_ = truth_.MakeState(0.0, 0.0, Heading(), p_true_, cmd_, 0.0);
     render_.noise_sigma = c.sim.noise_grey;
     render_.background = vis_.layout.dark_on_light ? 200.0 : 40.0;
@@ -78,11 +71,16 @@ class SimSource final : public FrameSource {
   }
 
   SourceStatus Next(Frame* f, int /*timeout_ms*/, std::string* /*error*/) override {
+    while (!stopped_ && k_ >= times_.size() && chunk_end_ < end_) NextChunk();
     if (stopped_ || k_ >= times_.size()) return SourceStatus::kEnd;
     const TimeNs t = times_[k_];
-    // The robot's commands up to this frame, as it would publish them.
-    while (ci_ < cmd_.size() && cmd_.ToNs(cmd_.TimeAt(static_cast<int>(ci_))) <= t)
+    // The robot's commands up to this frame, as it would publish them. A chunk's closing
+    // sample is the next chunk's first: it is sent once that chunk exists.
+    while (ci_ < cmd_.size()) {
+      const TimeNs tc = cmd_.ToNs(cmd_.TimeAt(static_cast<int>(ci_)));
+      if (tc > t || (tc >= chunk_end_ && chunk_end_ < end_)) break;
       EmitControl(ci_++);
+    }
     if (cfg_.sim.speed > 0) {  // pace to simulated time / speed
       const TimeNs due = start_mono_ + static_cast<TimeNs>(static_cast<double>(t) / cfg_.sim.speed);
       while (!stopped_ && MonotonicNs() < due) {
@@ -127,13 +125,35 @@ class SimSource final : public FrameSource {
     FromGrey(image, f);
     f->utime = start_utime_ + t / 1000;
     f->device_utime = f->utime;
-    f->sequence = static_cast<int64_t>(k_);
+    f->sequence = sequence_++;
     f->arrival_mono_ns = MonotonicNs();
     ++k_;
     return SourceStatus::kFrame;
   }
 
  private:
+  // The run is simulated in chunks (sim.chunk_s): memory is bounded by the chunk's length
+  // and the scenario's rates, not by the run's duration. A run no longer than one chunk
+  // draws exactly what a whole-run simulation would.
+  void NextChunk() {
+    const TimeNs chunk = SecondsToNs(cfg_.sim.chunk_s);
+    const TimeNs c0 = chunk_end_;
+    const TimeNs c1 = end_ - c0 > chunk ? c0 + chunk : end_;
+    const size_t before = cmd_.size();
+    cmd_.DiscardBefore(t_prev_);  // keeps the sample in force now
+    ci_ -= std::min(ci_, before - cmd_.size());
+    if (sc_.profile == "smooth") {
+      AppendSmoothRandom(&cmd_, c0, c1, sc_.control_low, sc_.control_high, sc_.min_period_s,
+                         sc_.control_rate_hz, rng_);
+    } else {
+      AppendPiecewiseRandom(&cmd_, c0, c1, sc_.control_low, sc_.control_high, sc_.min_period_s,
+                            3.0 * sc_.min_period_s, rng_);
+    }
+    times_ = FrameTimes(next_frame_, c1, sc_.camera, rng_, &next_frame_);
+    k_ = 0;
+    chunk_end_ = c1;
+  }
+
   double Heading() {
     return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_);
   }
@@ -199,12 +219,16 @@ class SimSource final : public FrameSource {
   std::mt19937_64 fault_rng_;  // its own stream: faults do not change the rest of the simulation
   VecN<kMaxState> p_true_;
   ControlSignal cmd_;
-  std::vector<TimeNs> times_;
+  std::vector<TimeNs> times_;  // frame times of the current chunk
+  TimeNs end_ = 0;             // the run's end
+  TimeNs chunk_end_ = 0;
+  TimeNs next_frame_ = 0;
   StateVec x_;
   vision::RenderOptions render_;
   kincal::controls_t msg_;
   std::vector<uint8_t> buf_;
   size_t k_ = 0, ci_ = 0;
+  int64_t sequence_ = 0;
   double t_prev_ = 0.0;
   bool carrying_ = false;
   TimeNs carry_until_ = 0;

@@ -22,7 +22,7 @@ bool FrameTimingOptions::IsValid(std::string* error) const {
 }
 
 std::vector<TimeNs> FrameTimes(TimeNs t0, TimeNs t1, const FrameTimingOptions& opt,
-                               std::mt19937_64& rng) {
+                               std::mt19937_64& rng, TimeNs* next) {
   std::string error;
   if (!opt.IsValid(&error)) throw std::invalid_argument("FrameTimes: " + error);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -35,6 +35,7 @@ std::vector<TimeNs> FrameTimes(TimeNs t0, TimeNs t1, const FrameTimingOptions& o
     if (unit(rng) < opt.jitter_prob) dt += opt.jitter_max_s * unit(rng);
     t += dt;
   }
+  if (next != nullptr) *next = SecondsToNs(t);
   return times;
 }
 

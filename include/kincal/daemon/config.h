@@ -59,13 +59,19 @@ struct LibcameraOptions {
   bool IsValid(std::string* error) const;
 };
 
-// The longest simulated run (s): its commands and frame times are made at start.
-inline constexpr double kMaxSimDurationS = 86400.0;
+// The longest simulated run (s): 30 days. The run is simulated in chunks, so its length
+// does not bound memory; the limit keeps times well inside int64 nanoseconds and double
+// seconds (sub-nanosecond resolution).
+inline constexpr double kMaxSimDurationS = 30.0 * 86400.0;
 
 struct SimOptions {
   std::string scenario = "sim_diffdrive.yaml";  // robot, truth, controls (as `kincal simulate`)
   double speed = 1.0;       // simulated seconds per wall-clock second; <= 0: as fast as possible
   double duration_s = 0.0;  // 0: the scenario's
+  // The run is simulated this many seconds at a time: memory holds one chunk of commands
+  // and frame times (rates x chunk_s), whatever the duration. A run no longer than one
+  // chunk is drawn exactly as a whole.
+  double chunk_s = 300.0;
   double margin_px = 40.0;  // a run ends when the target comes this close to the image edge
   double carry_s = 1.0;     // the robot is carried back to the centre (no target in view)
   double noise_grey = 2.0;  // image noise, grey levels
