@@ -86,6 +86,8 @@ TEST(DaemonSim, ControlsOverLcmAndPublishedOutputs) {
   c.sim.speed = 4;                // paced: LCM delivery keeps up
   c.robot.control_stamp = ControlStamp::kReceive;
   EXPECT_THROW(Validate(c), std::runtime_error) << "wall-clock receive stamps on a 4x simulation";
+  c.robot.control_stamp = ControlStamp::kMapped;
+  EXPECT_THROW(Validate(c), std::runtime_error) << "a 4x clock does not map onto the wall clock";
   c.robot.control_stamp = ControlStamp::kSender;
   c.record.path = TempPath("sim_lcm.lcm");
   Daemon d(c);

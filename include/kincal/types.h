@@ -10,6 +10,7 @@
 #include <Eigen/Dense>
 #include <limits>
 #include <string>
+#include <string_view>
 
 namespace kincal {
 
@@ -67,6 +68,15 @@ struct ControlInfo {
   std::string name;  // interface name
   std::string unit;  // e.g. "rad/s", "m/s", "rad", "tick", "tick/s"
 };
+
+// The largest magnitude a control in `unit` can have on a ground robot; beyond it a value
+// read from a file or a message is a unit mistake or garbage, refused by its reader. Wide
+// on purpose (10^4 rad/s is 95,000 rpm): it stops overflow, not unusual robots.
+inline double PlausibleControlLimit(std::string_view unit) {
+  if (unit == "rad/s") return 1e4;
+  if (unit == "m/s" || unit == "rad") return 1e3;
+  return 1e12;  // counts: ticks, ticks/s
+}
 
 // Scalar part of double or Jet, for branching and indexing.
 inline double ScalarOf(double v) { return v; }

@@ -27,8 +27,10 @@ constexpr std::array<Named<SourceKind>, 4> kSourceNames{{{"sim", SourceKind::kSi
                                                          {"replay", SourceKind::kReplay}}};
 constexpr std::array<Named<PoseMethod>, 2> kPoseMethodNames{
     {{"ground_plane", PoseMethod::kGroundPlane}, {"lowe", PoseMethod::kLowe}}};
-constexpr std::array<Named<ControlStamp>, 2> kControlStampNames{
-    {{"receive", ControlStamp::kReceive}, {"sender", ControlStamp::kSender}}};
+constexpr std::array<Named<ControlStamp>, 3> kControlStampNames{
+    {{"receive", ControlStamp::kReceive},
+     {"sender", ControlStamp::kSender},
+     {"mapped", ControlStamp::kMapped}}};
 constexpr std::array<Named<FrameEncoding>, 2> kFrameEncodingNames{
     {{"raw", FrameEncoding::kRaw}, {"png", FrameEncoding::kPng}}};
 // Pixel formats a camera can be asked for (PNG is only a recorded frame's encoding).
@@ -189,6 +191,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("height", &c.libcamera.height);
     s.Choice("pixel_format", &c.libcamera.pixel_format, kCameraFormatNames);
     s.Get("buffers", &c.libcamera.buffers);
+    s.Get("fps", &c.libcamera.fps);
     s.CheckUnknown();
   }
   {
@@ -332,9 +335,8 @@ bool V4l2Options::IsValid(std::string* error) const {
   return Expect(width > 0 && height > 0, "v4l2.width/height must be > 0", error) &&
          Expect(fps > 0, "v4l2.fps must be > 0", error) &&
          Expect(buffers >= 4 && buffers <= 32, "v4l2.buffers must be 4..32", error) &&
-         Expect(pixel_format == PixelFormat::kGrey || pixel_format == PixelFormat::kYuyv ||
-                    pixel_format == PixelFormat::kMjpeg,
-                "v4l2.pixel_format must be GREY, YUYV or MJPG (got '" +
+         Expect(pixel_format != PixelFormat::kPng,
+                "v4l2.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3 (got '" +
                     std::string(PixelFormatName(pixel_format)) + "')",
                 error);
 }
@@ -342,6 +344,8 @@ bool V4l2Options::IsValid(std::string* error) const {
 bool LibcameraOptions::IsValid(std::string* error) const {
   return Expect(width > 0 && height > 0, "libcamera.width/height must be > 0", error) &&
          Expect(buffers >= 2 && buffers <= 32, "libcamera.buffers must be 2..32", error) &&
+         Expect(fps >= 0 && fps <= 1000, "libcamera.fps must be in [0, 1000] (0: the camera's)",
+                error) &&
          Expect(pixel_format != PixelFormat::kPng,
                 "libcamera.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3", error);
 }

@@ -48,8 +48,11 @@ bool DecodeControls(const void* data, size_t n, const KinematicModel& model, boo
       return false;
     }
     const double v = m.values[static_cast<size_t>(i)];
-    if (!std::isfinite(v)) {
-      *why = "control '" + name + "' is not finite";
+    const double limit = PlausibleControlLimit(model.controls()[static_cast<size_t>(k)].unit);
+    if (!std::isfinite(v) || std::abs(v) > limit) {
+      *why = "control '" + name + "' = " + std::to_string(v) +
+             ": expected a finite value within +-" + std::to_string(limit) + " " +
+             model.controls()[static_cast<size_t>(k)].unit;
       return false;
     }
     s.values[static_cast<size_t>(k)] = v;
@@ -69,7 +72,7 @@ void ControlReceiver::OnMessage(const void* data, size_t n, int64_t receive_utim
   publisher_.Record(channel_, receive_utime, data, n);
   ControlSample s;
   thread_local std::string why;
-  if (!DecodeControls(data, n, model_, use_sender_stamp_, receive_utime, &s, &why)) {
+  if (!DecodeControls(data, n, model_, stamp_ == ControlStamp::kSender, receive_utime, &s, &why)) {
     if (counters_.messages_rejected.fetch_add(1) == 0) {
       spdlog::warn("rejected a control message: {}", why);
     }
@@ -77,8 +80,31 @@ void ControlReceiver::OnMessage(const void* data, size_t n, int64_t receive_utim
     last_reject_ = why;
     return;
   }
+  if (stamp_ == ControlStamp::kMapped) {
+    std::lock_guard lock(mu_);
+    if (s.sender_utime > 0) {
+      const int64_t steps = clock_.steps();
+      s.utime = clock_.Map(s.sender_utime, receive_utime);
+      if (clock_.steps() > steps) counters_.control_clock_steps.fetch_add(1);
+    } else if (without_sender_stamp_++ == 0) {
+      spdlog::warn(
+          "control messages without sender_utime: stamped on receipt, so a loaded receiver's "
+          "delays reach the filter (robot.control_stamp: mapped needs the robot's own stamp)");
+    }
+  }
   counters_.controls_received.fetch_add(1);
   out_.Push(s);
+}
+
+ControlTiming ControlReceiver::timing() const {
+  std::lock_guard lock(mu_);
+  ControlTiming t;
+  t.without_sender_stamp = without_sender_stamp_;
+  if (stamp_ == ControlStamp::kMapped && clock_.measured() > 0) {
+    t.jitter_p95_ms = clock_.jitter_p95_ms();
+    t.jitter_max_ms = clock_.jitter_max_ms();
+  }
+  return t;
 }
 
 std::string ControlReceiver::last_reject() const {

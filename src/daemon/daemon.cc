@@ -95,8 +95,8 @@ struct Daemon::Impl {
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
         control_q(static_cast<size_t>(cfg.queues.controls), QueuePolicy()),
-        intake(sys.model(), cfg.robot.control_stamp == ControlStamp::kSender,
-               cfg.lcm.controls_channel, &out, &control_q, &counters),
+        intake(sys.model(), cfg.robot.control_stamp, cfg.lcm.controls_channel, &out, &control_q,
+               &counters),
         capture(std::make_unique<CaptureStage>(
             source.get(),
             CaptureOptions{cfg.lcm.frame_channel, cfg.lcm.publish_frames,
@@ -255,6 +255,9 @@ struct Daemon::Impl {
     c.controls_dropped_queue = control_q.dropped();
     c.log_events_written = out.recorder() ? out.recorder()->written() : 0;
     c.log_events_lost = out.recorder() ? out.recorder()->lost() : 0;
+    const ControlTiming timing = intake.timing();
+    c.control_jitter_p95_ms = timing.jitter_p95_ms;
+    c.control_jitter_max_ms = timing.jitter_max_ms;
     return c;
   }
 };
@@ -379,7 +382,7 @@ DaemonCounters Daemon::counters() const {
   c.latency_p50_ms = det.total_p50_ms;
   c.latency_p99_ms = det.total_p99_ms;
   c.latency_max_ms = det.total_max_ms;
-  return c;
+  return c;  // control jitter: from Snapshot()
 }
 
 }  // namespace kincal::daemon

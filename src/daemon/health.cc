@@ -26,19 +26,23 @@ std::string SummaryLine(const DaemonCounters& c) {
       "{} valid poses ({} dropped by the queue), {} updates, {} gated, {} runs, {} filter "
       "resets, {} time resets, {} source restarts; {} controls ({} rejected, {} out of order, "
       "{} late, {} dropped by the queue); log {} written / {} lost; latency p50 {:.3f} ms p99 "
-      "{:.3f} ms",
+      "{:.3f} ms{}",
       c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frames_bad,
       c.frames_out_of_order, c.poses_valid, c.poses_dropped_queue, c.updates, c.poses_gated,
       c.run_resets + (c.updates > 0 ? 1 : 0), c.filter_resets, c.time_resets, c.source_restarts,
       c.controls_received, c.messages_rejected, c.controls_out_of_order, c.controls_late,
       c.controls_dropped_queue, c.log_events_written, c.log_events_lost, c.latency_p50_ms,
-      c.latency_p99_ms);
+      c.latency_p99_ms,
+      c.control_jitter_p95_ms < 0
+          ? std::string()
+          : fmt::format("; control receive jitter p95 {:.1f} ms max {:.1f} ms, {} clock steps",
+                        c.control_jitter_p95_ms, c.control_jitter_max_ms, c.control_clock_steps));
 }
 
 void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
                            int64_t utime, kincal::health_t* h) {
   *h = kincal::health_t{};
-  h->schema_version = 4;
+  h->schema_version = 5;
   h->utime = utime;
   h->source = s.source_name;
   h->frame_rate_hz = static_cast<double>(now.frames_captured - prev_.frames_captured) / period_s;
@@ -47,6 +51,8 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
   h->latency_p99_ms = s.latency_p99_ms;
   h->filter_status = static_cast<int8_t>(s.filter_status);
   h->seconds_without_target = s.seconds_without_target;
+  h->control_jitter_p95_ms = now.control_jitter_p95_ms;
+  h->control_jitter_max_ms = now.control_jitter_max_ms;
 
   Problems p;
   if (!s.source_error.empty()) p.Add("source: " + s.source_error);
@@ -74,6 +80,9 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
     p.Add("filter diverged and was restarted from a batch fit");
   }
   if (now.time_resets > prev_.time_resets) p.Add("a clock jumped back: new time base");
+  if (now.control_clock_steps > prev_.control_clock_steps) {
+    p.Add("the robot's clock stepped (sender_utime): control stamps re-mapped");
+  }
   if (s.filter_status == kincal::params_t::STATUS_DIVERGED) {
     p.Add("filter diverged: poses fail the innovation gate");
   } else if (s.filter_status == kincal::params_t::STATUS_MODEL_INADEQUATE) {

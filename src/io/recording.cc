@@ -175,6 +175,33 @@ std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
   return rows;
 }
 
+// Seconds within +-1e10 (a Unix time to the year 2286, or seconds since a start), positions
+// within 1000 km: anything else is a unit mistake or garbage, and would overflow the
+// nanosecond time base.
+constexpr double kMaxAbsTimeS = 1e10;
+constexpr double kMaxAbsPositionM = 1e6;
+
+void CheckRange(const Row& r, const std::string& path, const std::string& column, double value,
+                double limit, const char* expected) {
+  if (std::abs(value) <= limit) return;
+  std::ostringstream m;
+  m.precision(15);
+  m << path << ":" << r.line << ": column '" << column << "': " << value << " is beyond +-" << limit
+    << " (" << expected << ")";
+  throw RecordingError(m.str());
+}
+
+// Every value within its plausible range: time, then `limits[i]` for column `names[i]`.
+void CheckRanges(const std::vector<Row>& rows, const std::string& path,
+                 const std::vector<std::string>& names, const std::vector<double>& limits,
+                 const std::vector<const char*>& expected) {
+  for (const Row& r : rows) {
+    CheckRange(r, path, "t", r.t, kMaxAbsTimeS, "seconds");
+    for (size_t i = 0; i < names.size() && i < r.v.size(); ++i)
+      CheckRange(r, path, names[i], r.v[i], limits[i], expected[i]);
+  }
+}
+
 void CheckOrder(const std::vector<Row>& rows, const std::string& path, const char* what) {
   if (rows.empty()) throw RecordingError(path + ": no " + std::string(what) + " rows");
   for (size_t i = 1; i < rows.size(); ++i) {
@@ -244,6 +271,15 @@ Recording ReadCsvRecording(const std::string& controls_csv, const std::string& p
   for (const auto& c : model.controls()) names.push_back(c.name);
   const auto controls = ReadCsv(controls_csv, names);
   const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"});
+  std::vector<double> limits;
+  std::vector<const char*> expected;
+  for (const auto& c : model.controls()) {
+    limits.push_back(PlausibleControlLimit(c.unit));
+    expected.push_back(c.unit.c_str());
+  }
+  CheckRanges(controls, controls_csv, names, limits, expected);
+  CheckRanges(poses, poses_csv, {"x", "y", "theta"}, {kMaxAbsPositionM, kMaxAbsPositionM, 1e6},
+              {"metres", "metres", "radians"});
   return Assemble(controls_csv + " + " + poses_csv, controls, poses, model.num_controls(),
                   controls_csv, poses_csv);
 }
@@ -254,6 +290,10 @@ Recording ReadMrclam(const std::string& dir, int robot) {
   int comments = 0;
   const auto odo = ReadDat(base + "_Odometry.dat", 3, &comments);
   const auto gt = ReadDat(base + "_Groundtruth.dat", 4, &comments);
+  CheckRanges(odo, base + "_Odometry.dat", {"v", "omega"},
+              {PlausibleControlLimit("m/s"), PlausibleControlLimit("rad/s")}, {"m/s", "rad/s"});
+  CheckRanges(gt, base + "_Groundtruth.dat", {"x", "y", "theta"},
+              {kMaxAbsPositionM, kMaxAbsPositionM, 1e6}, {"metres", "metres", "radians"});
   Recording rec = Assemble("MR.CLAM " + dir + " robot " + std::to_string(robot), odo, gt, 2,
                            base + "_Odometry.dat", base + "_Groundtruth.dat");
   rec.stats.comment_lines = comments;

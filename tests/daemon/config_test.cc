@@ -38,7 +38,7 @@ TEST(Config, DocumentedExamplesLoadIntoTypedOptions) {
   EXPECT_TRUE(sim.IsValid(&error)) << error;
   EXPECT_EQ(sim.source, SourceKind::kSim);
   EXPECT_EQ(sim.pose.method, PoseMethod::kGroundPlane);
-  EXPECT_EQ(sim.robot.control_stamp, ControlStamp::kReceive);
+  EXPECT_EQ(sim.robot.control_stamp, ControlStamp::kMapped);
   EXPECT_EQ(sim.robot.model, "diffdrive");
   EXPECT_DOUBLE_EQ(sim.robot.guess.at("d"), 0.160);
   EXPECT_DOUBLE_EQ(sim.camera.nadir_height_m, 2.0);
@@ -94,10 +94,10 @@ TEST(Config, EachSectionSaysWhatItExpects) {
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_EQ(error, "v4l2.buffers must be 4..32");
   c = DaemonConfig{};
-  c.v4l2.pixel_format = PixelFormat::kRgb24;  // libcamera can, V4L2 here cannot
+  c.v4l2.pixel_format = PixelFormat::kPng;  // a recording's encoding, not a camera's
   c.source = SourceKind::kV4l2;
   EXPECT_FALSE(c.v4l2.IsValid(&error));
-  EXPECT_EQ(error, "v4l2.pixel_format must be GREY, YUYV or MJPG (got 'RGB3')");
+  EXPECT_EQ(error, "v4l2.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3 (got 'PNG')");
   c = DaemonConfig{};
   c.filter.type = "kalman";
   EXPECT_FALSE(c.IsValid(&error));

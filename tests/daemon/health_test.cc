@@ -15,10 +15,15 @@ TEST(Health, EveryCounterIsPublishedWhole) {
 #define KINCAL_SET(name, meaning) c.name = v++;
   KINCAL_DAEMON_COUNTERS(KINCAL_SET)
 #undef KINCAL_SET
+  c.control_jitter_p95_ms = 12.5;
+  c.control_jitter_max_ms = 80.0;
   HealthReporter r;
   kincal::health_t h;
   r.Build(c, HealthStatus{}, 1.0, 42, &h);
-  EXPECT_EQ(h.schema_version, 4);
+  EXPECT_EQ(h.schema_version, 5);
+  EXPECT_EQ(h.control_jitter_p95_ms, 12.5);
+  EXPECT_EQ(h.control_jitter_max_ms, 80.0);
+  EXPECT_NE(h.message.find("the robot's clock stepped"), std::string::npos) << h.message;
   EXPECT_EQ(h.utime, 42);
   v = 1;
 #define KINCAL_CHECK_FIELD(name, meaning) EXPECT_EQ(h.name, v++) << #name;

@@ -44,6 +44,23 @@ TEST_F(RecordingCsv, DisjointSpansAreAnError) {
   EXPECT_NE(e.find("time spans do not overlap"), std::string::npos) << e;
 }
 
+// Issue 16: every number read is range-checked, naming the file, line and column. Beyond
+// these, a time overflowed the nanosecond time base.
+TEST_F(RecordingCsv, ImplausibleValuesNameTheirColumnAndUnit) {
+  EXPECT_NE(Error("t,v,omega\n0,1,0\n1,1,1e300\n", kPoses)
+                .find("c.csv:3: column 'omega': 1e+300 is beyond +-10000 (rad/s)"),
+            std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n0,5000,0\n1,1,0\n", kPoses)
+                .find("c.csv:2: column 'v': 5000 is beyond +-1000 (m/s)"),
+            std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n0,1,0\n1e300,1,0\n", kPoses)
+                .find("c.csv:3: column 't': 1e+300 is beyond +-10000000000 (seconds)"),
+            std::string::npos);
+  EXPECT_NE(Error("t,v,omega\n0,1,0\n2,1,0\n", "t,x,y,theta\n0,0,0,0\n1,2e9,0,0\n")
+                .find("p.csv:3: column 'x': 2000000000 is beyond +-1000000 (metres)"),
+            std::string::npos);
+}
+
 TEST_F(RecordingCsv, EmptyFileAndWrongRowLength) {
   EXPECT_NE(Error("", kPoses).find("c.csv: empty file (no header)"), std::string::npos);
   EXPECT_NE(Error("t,v,omega\n0,1\n", kPoses).find("c.csv:2: expected 3 values, found 2"),

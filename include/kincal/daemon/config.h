@@ -18,8 +18,10 @@ namespace kincal::daemon {
 // files and messages use: SourceName(kV4l2) is "v4l2").
 enum class SourceKind { kSim, kV4l2, kLibcamera, kReplay };
 enum class PoseMethod { kGroundPlane, kLowe };  // ground_plane | lowe
-enum class ControlStamp { kReceive, kSender };  // receive | sender
-enum class FrameEncoding { kRaw, kPng };        // raw | png
+// receive | sender | mapped (the sender's stamps mapped onto the receive clock, see
+// src/daemon/control_clock.h; the receive stamp for a message without sender_utime)
+enum class ControlStamp { kReceive, kSender, kMapped };
+enum class FrameEncoding { kRaw, kPng };  // raw | png
 std::string_view SourceName(SourceKind k);
 std::string_view PoseMethodName(PoseMethod m);
 std::string_view ControlStampName(ControlStamp s);
@@ -56,6 +58,9 @@ struct LibcameraOptions {
   // GREY (R8), YUYV, MJPG, BGR3 (RGB888), RGB3 (BGR888)
   PixelFormat pixel_format = PixelFormat::kGrey;
   int buffers = 4;
+  // Frames per second asked of the camera (its FrameDurationLimits control); 0: the
+  // camera's own. A camera without the control runs at its own rate, and says so.
+  double fps = 0.0;
   bool IsValid(std::string* error) const;
 };
 
@@ -120,7 +125,7 @@ struct RobotOptions {
   bool auto_effects = false;            // "auto": add effects online when the check is decisive
   std::map<std::string, double> guess;  // initial parameter values (default: model defaults)
   double guess_sigma_fraction = 0.2;
-  ControlStamp control_stamp = ControlStamp::kReceive;
+  ControlStamp control_stamp = ControlStamp::kMapped;
   double max_control_delay_s = 0.1;  // a pose waits this long for the controls up to its time
   bool IsValid(std::string* error) const;
 };

@@ -46,6 +46,7 @@ namespace kincal::daemon {
   X(controls_out_of_order, "controls older than the newest one: ignored")                    \
   X(controls_late, "controls older than the filter's time: applied from then on")            \
   X(controls_dropped_queue, "controls dropped by the full control queue (live)")             \
+  X(control_clock_steps, "the robot's clock stepped (control_stamp: mapped): new envelope")  \
   X(log_events_written, "events written to the --record log")                                \
   X(log_events_lost, "events the recorder dropped (live, its queue full)")
 
@@ -54,6 +55,9 @@ struct DaemonCounters {
   KINCAL_DAEMON_COUNTERS(KINCAL_COUNTER_FIELD)
 #undef KINCAL_COUNTER_FIELD
   double latency_p50_ms = 0, latency_p99_ms = 0, latency_max_ms = 0;  // whole run
+  // Control receive delay beyond the least (robot.control_stamp: mapped), whole run; -1:
+  // not measured (other stamp choices, or no sender_utime in the messages).
+  double control_jitter_p95_ms = -1, control_jitter_max_ms = -1;
 };
 
 class Daemon {
