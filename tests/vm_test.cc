@@ -273,9 +273,8 @@ TEST(VmV4l2, DaemonCapturesAndRecordsFromVivid) {
 namespace kincal::daemon {
 namespace {
 
-// Evidence for docs/daemon.md: with vivid loaded, libcamera 0.0.3 sees no camera (it has
-// no pipeline handler for vivid, and Debian's kernel is built without vimc), and the
-// libcamera source says so.
+// With vivid loaded, libcamera 0.0.3 sees no camera (it has no pipeline handler for vivid;
+// vm.libcamera_vimc streams from vimc), and the libcamera source says so.
 int OpenDescriptors() {
   int n = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator("/proc/self/fd")) ++n;
@@ -340,7 +339,7 @@ namespace {
 TEST(VmV4l2, TheDeviceDisappearsAndComesBack) {
   ASSERT_NE(std::getenv("KINCAL_IN_VM"), nullptr);
   const char* modules = std::getenv("KINCAL_VM_MODULES");
-  const char* params = std::getenv("KINCAL_VIVID_PARAMS");
+  const char* params = std::getenv("KINCAL_VM_DRIVER_PARAMS");
   ASSERT_NE(modules, nullptr);
   ASSERT_NE(params, nullptr);
   const std::string cap = FindNode("vid-cap");

@@ -44,7 +44,8 @@ void CaptureStage::Run(const std::atomic<bool>& stop) {
     if (st == SourceStatus::kError) {
       set_error_(error);
       spdlog::error("source {}: {}", source_.name(), error);
-      if (!can_reopen || !ReopenWithBackoff(stop)) break;
+      // Asked again: a source may find it cannot be reopened (a vanished libcamera camera).
+      if (!can_reopen || !source_.capabilities().can_reopen || !ReopenWithBackoff(stop)) break;
       continue;
     }
     counters_.frames_captured.fetch_add(1);

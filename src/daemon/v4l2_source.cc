@@ -66,7 +66,22 @@ class V4l2Source final : public FrameSource {
       if (Status s = (this->*step)(); !s.ok()) return s;
     }
     v4l2_buf_type type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
-    if (Ioctl(fd_, VIDIOC_STREAMON, &type) != 0) return Fail("VIDIOC_STREAMON");
+    if (Ioctl(fd_, VIDIOC_STREAMON, &type) != 0) {
+      // EPIPE: a media-controller device whose pipeline does not deliver this format.
+      if (errno == EPIPE) {
+        const int err = errno;
+        Close();
+        return Status::Error(
+            opt_.device + ": VIDIOC_STREAMON: " + std::strerror(err) +
+            ": the device is one node of a media-controller pipeline whose links or subdevice "
+            "formats do not produce " +
+            std::to_string(width_) + "x" + std::to_string(height_) + " " +
+            std::string(PixelFormatName(format_)) +
+            "; configure the pipeline (media-ctl --links/--set-v4l2) or use the libcamera "
+            "source, which configures it");
+      }
+      return Fail("VIDIOC_STREAMON");
+    }
     streaming_ = true;
     return {};
   }
@@ -152,9 +167,11 @@ class V4l2Source final : public FrameSource {
   Status SetFormat() {
     const PixelFormat want = opt_.pixel_format;
     const std::string want_name(PixelFormatName(want));
-    const uint32_t fourcc = want == PixelFormat::kGrey   ? V4L2_PIX_FMT_GREY
-                            : want == PixelFormat::kYuyv ? V4L2_PIX_FMT_YUYV
-                                                         : V4L2_PIX_FMT_MJPEG;
+    const uint32_t fourcc = want == PixelFormat::kGrey    ? V4L2_PIX_FMT_GREY
+                            : want == PixelFormat::kYuyv  ? V4L2_PIX_FMT_YUYV
+                            : want == PixelFormat::kBgr24 ? V4L2_PIX_FMT_BGR24
+                            : want == PixelFormat::kRgb24 ? V4L2_PIX_FMT_RGB24
+                                                          : V4L2_PIX_FMT_MJPEG;
     v4l2_format fmt{};
     fmt.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
     fmt.fmt.pix.width = static_cast<uint32_t>(opt_.width);
