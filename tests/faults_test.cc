@@ -40,16 +40,23 @@ std::vector<Event> ReadLog(const std::string& path) {
   return out;
 }
 
+// Writes the events and checks that they read back whole (a full disk once cut a faulty
+// log short, and the test then judged the daemon on part of it).
 void WriteLog(const std::string& path, const std::vector<Event>& events) {
-  lcm::LogFile log(path, "w");
-  for (const auto& e : events) {
-    lcm::LogEvent ev{};
-    ev.timestamp = e.utime;
-    ev.channel = e.channel;
-    ev.datalen = static_cast<int32_t>(e.data.size());
-    ev.data = const_cast<uint8_t*>(e.data.data());
-    log.writeEvent(&ev);
+  {
+    lcm::LogFile log(path, "w");
+    for (const auto& e : events) {
+      lcm::LogEvent ev{};
+      ev.timestamp = e.utime;
+      ev.channel = e.channel;
+      ev.datalen = static_cast<int32_t>(e.data.size());
+      ev.data = const_cast<uint8_t*>(e.data.data());
+      ASSERT_EQ(log.writeEvent(&ev), 0) << path << ": cannot write an event";
+    }
   }
+  const std::vector<Event> back = ReadLog(path);
+  ASSERT_EQ(back.size(), events.size()) << path << " was not written whole";
+  EXPECT_EQ(back.back().data, events.back().data) << path << ": its last event differs";
 }
 
 template <typename Msg>

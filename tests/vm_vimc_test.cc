@@ -14,12 +14,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <kincal/pose_t.hpp>
+#include <map>
 #include <thread>
 
 #include "daemon/sources.h"
-#include <kincal/pose_t.hpp>
-#include <map>
-
 #include "kincal/daemon/daemon.h"
 #include "kincal/daemon/frame.h"
 #include "kincal/io/lcm_log_reader.h"
@@ -60,7 +59,8 @@ std::string WriteIntrinsics(int width, int height) {
 }
 
 void RequireVm() {
-  ASSERT_NE(std::getenv("KINCAL_IN_VM"), nullptr) << "runs inside the VM: ctest -R vm.libcamera_vimc";
+  ASSERT_NE(std::getenv("KINCAL_IN_VM"), nullptr)
+      << "runs inside the VM: ctest -R vm.libcamera_vimc";
   ASSERT_STREQ(std::getenv("KINCAL_VM_DRIVER"), "vimc");
 }
 
@@ -141,8 +141,8 @@ TEST(VmVimc, TheNegotiatedFormatIsConvertedToGreyCorrectly) {
       return static_cast<int>(grey.at<uint8_t>(f.height / 2, (2 * b + 1) * f.width / 16));
     };
     std::cout << "asked " << PixelFormatName(want) << ", got " << PixelFormatName(f.format)
-              << ": bars white " << bar(0) << " red " << bar(5) << " blue " << bar(6)
-              << " black " << bar(7) << "\n";
+              << ": bars white " << bar(0) << " red " << bar(5) << " blue " << bar(6) << " black "
+              << bar(7) << "\n";
     EXPECT_NEAR(bar(0), 191, 2);
     EXPECT_NEAR(bar(5), 57, 2) << "red bar";
     EXPECT_NEAR(bar(6), 22, 2) << "blue bar";
@@ -174,7 +174,8 @@ TEST(VmVimc, SizeAndRateAreHonouredOrReportedAsAdjusted) {
               std::string::npos)
         << name;
   }
-  const double fps = 11e6 / static_cast<double>(frames.back().device_utime - frames[1].device_utime);
+  const double fps =
+      11e6 / static_cast<double>(frames.back().device_utime - frames[1].device_utime);
   std::cout << "asked 640x480 at 10 fps: " << name << "; measured " << fps << " fps\n";
   if (name.find("no frame-rate control") == std::string::npos) {
     EXPECT_NEAR(fps, 10.0, 1.0);
@@ -198,19 +199,21 @@ TEST(VmVimc, V4l2StreamsOnceThePipelineIsConfigured) {
   }
   o.width = static_cast<int>(fmt.fmt.pix.width);
   o.height = static_cast<int>(fmt.fmt.pix.height);
-  o.pixel_format = fmt.fmt.pix.pixelformat == V4L2_PIX_FMT_RGB24 ? PixelFormat::kRgb24
-                                                                 : PixelFormat::kBgr24;
+  o.pixel_format =
+      fmt.fmt.pix.pixelformat == V4L2_PIX_FMT_RGB24 ? PixelFormat::kRgb24 : PixelFormat::kBgr24;
   auto src = MakeV4l2Source(o);
   const Status s = src->Start();
   ASSERT_TRUE(s.ok()) << s.message();
   std::string error;
   const std::vector<Frame> frames = Capture(src.get(), 10, &error);
   EXPECT_EQ(frames.size(), 10u) << error;
-  std::cout << "v4l2 on the configured vimc pipeline: " << frames.size() << " frames "
-            << o.width << "x" << o.height << " " << PixelFormatName(o.pixel_format) << "\n";
+  std::cout << "v4l2 on the configured vimc pipeline: " << frames.size() << " frames " << o.width
+            << "x" << o.height << " " << PixelFormatName(o.pixel_format) << "\n";
 }
 
-std::string Kincald() { return (fs::read_symlink("/proc/self/exe").parent_path() / "kincald").string(); }
+std::string Kincald() {
+  return (fs::read_symlink("/proc/self/exe").parent_path() / "kincald").string();
+}
 
 // The shipped config, with intrinsics for what vimc delivers and no floor file (nadir).
 std::string VimcDaemonConfig() {
@@ -257,8 +260,9 @@ TEST(VmVimc, DaemonRecordsALogThatReplaysBitIdentically) {
   RequireVm();
   const std::string cfg = VimcDaemonConfig(), live = Tmp("vimc_live.lcm"),
                     again = Tmp("vimc_replayed.lcm");
-  const std::string run = "timeout --foreground --preserve-status -s INT 5 " + Kincald() + " --config " + cfg + " --record " +
-                          live + " -q > " + Tmp("live.txt") + " 2>&1";
+  const std::string run = "timeout --foreground --preserve-status -s INT 5 " + Kincald() +
+                          " --config " + cfg + " --record " + live + " -q > " + Tmp("live.txt") +
+                          " 2>&1";
   EXPECT_EQ(std::system(run.c_str()), 0) << run;
   const std::string replay = Kincald() + " --config " + cfg + " --replay " + live +
                              " --fast --record " + again + " -q > " + Tmp("replay.txt") + " 2>&1";
@@ -293,8 +297,8 @@ TEST(VmVimc, DaemonRecordsALogThatReplaysBitIdentically) {
 // message that says the camera is taken.
 TEST(VmVimc, ASecondProcessHoldingTheCameraGetsAClearError) {
   RequireVm();
-  const std::string cmd = "sh -c '" + Kincald() + " --config " + VimcDaemonConfig() +
-                          " -q > " + Tmp("holder.txt") + " 2>&1 & echo $!'";
+  const std::string cmd = "sh -c '" + Kincald() + " --config " + VimcDaemonConfig() + " -q > " +
+                          Tmp("holder.txt") + " 2>&1 & echo $!'";
   FILE* p = popen(cmd.c_str(), "r");
   ASSERT_NE(p, nullptr);
   int pid = 0;

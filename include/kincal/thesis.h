@@ -68,7 +68,19 @@ struct ThesisResult {
   std::map<std::string, Eigen::Vector3d> joint_sigma;
   // Fraction of parameter errors of the joint estimates inside 3 sigma, over trials.
   std::map<std::string, double> joint_within_3sigma;
+  // Per trial: each estimator's joint NNDE and the bound's expected NNDE (fractions).
+  std::map<std::string, std::vector<double>> joint_trial_nnde;
+  std::vector<double> bound_trial_nnde;
 };
+
+// An estimator's mean-square NNDE over the trials divided by the bound's, with a 95 %
+// confidence interval (the mean of the squared errors' standard error; the bound varies
+// little between trials). An efficient estimator's interval contains 1.
+struct BoundRatio {
+  double ratio = 0.0, low = 0.0, high = 0.0;
+  int trials = 0;
+};
+BoundRatio RatioToBound(const ThesisResult& r, const std::string& estimator);
 
 // NNDE = || (a_est - a_true) / a_true || (thesis eq. 7.2), as a fraction.
 double Nnde(const Eigen::VectorXd& est, const Eigen::VectorXd& truth);

@@ -24,9 +24,9 @@ void ControlClock::Push(Candidate c) {
 int64_t ControlClock::Map(int64_t sender_utime, int64_t receive_utime) {
   const Candidate c{sender_utime, receive_utime - sender_utime};
   // The robot's clock went back, or its offset jumped beyond any delay: a new envelope.
-  if (size_ > 0 && (sender_utime < back().sender_utime ||
-                    c.offset_us - front().offset_us > opt_.max_jitter_us ||
-                    c.offset_us < front().offset_us - opt_.max_jitter_us)) {
+  if (size_ > 0 &&
+      (sender_utime < back().sender_utime || c.offset_us - front().offset_us > opt_.max_jitter_us ||
+       c.offset_us < front().offset_us - opt_.max_jitter_us)) {
     ++steps_;
     Restart(c);
   } else {

@@ -88,6 +88,32 @@ double Nnde(const Eigen::VectorXd& est, const Eigen::VectorXd& truth) {
   return ((est - truth).array() / truth.array()).matrix().norm();
 }
 
+BoundRatio RatioToBound(const ThesisResult& r, const std::string& estimator) {
+  BoundRatio out;
+  const auto it = r.joint_trial_nnde.find(estimator);
+  if (it == r.joint_trial_nnde.end() || it->second.size() != r.bound_trial_nnde.size() ||
+      it->second.empty()) {
+    return out;
+  }
+  const auto& e = it->second;
+  const double n = static_cast<double>(e.size());
+  double se2 = 0.0, sb2 = 0.0;
+  for (size_t i = 0; i < e.size(); ++i) {
+    se2 += e[i] * e[i];
+    sb2 += r.bound_trial_nnde[i] * r.bound_trial_nnde[i];
+  }
+  const double mean_e2 = se2 / n, mean_b2 = sb2 / n;
+  double var = 0.0;
+  for (double v : e) var += std::pow(v * v - mean_e2, 2);
+  var /= std::max(1.0, n - 1.0);
+  const double half = 1.96 * std::sqrt(var / n) / mean_b2;
+  out.ratio = mean_e2 / mean_b2;
+  out.low = out.ratio - half;
+  out.high = out.ratio + half;
+  out.trials = static_cast<int>(e.size());
+  return out;
+}
+
 double ExpectedNnde(const Eigen::MatrixXd& C, const Eigen::VectorXd& truth) {
   const Eigen::VectorXd w = truth.cwiseInverse();
   return std::sqrt((w.asDiagonal() * C * w.asDiagonal()).trace());
@@ -220,6 +246,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
                       const Eigen::Matrix3d& cov) {
       const double e = Nnde(est, truth);
       joint_sq[name] += e * e;
+      res.joint_trial_nnde[name].push_back(e);
       res.joint_estimate[name] = est;
       res.joint_sigma[name] = cov.diagonal().cwiseSqrt();
       for (int i = 0; i < 3; ++i) {
@@ -264,6 +291,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
     KINCAL_CHECK(bound.status.ok(), bound.status.message().c_str());
     const double eb = ExpectedNnde(bound.covariance, truth);
     bound_sq += eb * eb;
+    res.bound_trial_nnde.push_back(eb);
     if (o.per_run) {
       for (const Run& run : d.runs) {
         const BatchResult b1 = BoundAt(sys, d.controls, run.meas, truth, {run.start_pose}, bopt);

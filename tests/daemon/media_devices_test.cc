@@ -55,8 +55,7 @@ TEST(MediaDevices, NamesTheProcessHoldingANode) {
   waitpid(child, nullptr, 0);
   close(ready[0]);
   close(ready[1]);
-  EXPECT_NE(held.find(node + " is held by pid " + std::to_string(child) + " ("),
-            std::string::npos)
+  EXPECT_NE(held.find(node + " is held by pid " + std::to_string(child) + " ("), std::string::npos)
       << held;
 }
 
