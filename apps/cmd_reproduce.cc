@@ -65,7 +65,7 @@ Command AddReproduce(CLI::App& app) {
               << "  " << std::setw(10) << r.thesis_nnde_percent
               << "   (NNDE of the mean of Table 6-5)\n\n";
     if (!r.per_run_nnde_percent.empty()) {
-      std::cout << "  Per experiment (one filter per run, prior-dependent; mean NNDE %):\n";
+      std::cout << "  Per experiment (one filter per run, prior-dependent; RMS NNDE %):\n";
       for (const auto& [name, v] : r.per_run_nnde_percent) {
         std::cout << "    " << std::setw(6) << name << "  " << std::setw(10) << v << "\n";
       }
