@@ -1,8 +1,8 @@
 // libcamera capture: camera manager, one stream, requests recycled on completion,
 // sensor timestamps (CLOCK_MONOTONIC, ns) from the request metadata. A size or format the
 // camera adjusts is taken when kincal can read it, and said (in the log and the source's
-// name); a camera that stops delivering (unplugged, driver unbound: without udevd no
-// hot-unplug event comes) is an error after kStallS, so the capture stage reopens it.
+// name). A camera that delivers nothing for kStallNs is an error: one that stalled is
+// reopened by the capture stage; one whose device vanished ends the run (see Close()).
 #include <libcamera/libcamera.h>
 #include <spdlog/spdlog.h>
 #include <sys/mman.h>
