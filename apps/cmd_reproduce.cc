@@ -28,6 +28,15 @@ Command AddReproduce(CLI::App& app) {
   app.add_option("--centroid-sigma", args->opt.centroid_sigma_px,
                  "marker centre noise, px (thesis: 0.02)")
       ->capture_default_str();
+  app.add_option("--wheel-gain-sigma", args->opt.wheel.gain_sigma,
+                 "look-up-table gain error per wheel and speed band (fraction; 0: none)")
+      ->capture_default_str();
+  app.add_option("--command-step", args->opt.wheel.command_step_rad_s,
+                 "wheel-rate command resolution, rad/s (thesis 7.3.2: 0.1; 0: exact)")
+      ->capture_default_str();
+  app.add_option("--stamp-step", args->opt.stamp_step_s,
+                 "frame timestamps on a timer of this tick, s (0: exact)")
+      ->capture_default_str();
   app.add_option("--json", args->json, "write the results as JSON to this file");
   return [args]() -> int {
     const ThesisOptions& o = args->opt;

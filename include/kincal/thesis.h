@@ -11,6 +11,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <map>
 #include <string>
@@ -30,6 +31,24 @@ inline constexpr double kThesisRL = 0.0310, kThesisRR = 0.0313, kThesisD = 0.148
 // Table 6-5 estimates.
 inline constexpr double kThesisNndePercent = 0.466;
 
+// Systematic wheel-rate errors of the thesis's robot (all zero: the idealised world). Its
+// wheels turn at the rate its look-up table (Fig. 6-6) gives for the integer command the
+// requested rate maps to, not at the requested rate: the command is quantised (0.1 rad/s,
+// §7.3.2), saturates, and each wheel's table is off by a gain error per speed band, fixed
+// for a trial (the table was measured once). The estimators see the requested rates.
+struct WheelRateErrors {
+  double gain_sigma = 0.0;          // per wheel and speed band, N(0, sigma^2)
+  double band_width_rad_s = 5.0;    // width of a look-up-table speed band
+  double command_step_rad_s = 0.0;  // command resolution; 0: none
+  double max_rad_s = 0.0;           // saturation; 0: none
+  bool IsValid(std::string* error) const;
+};
+
+// The rate wheel `wheel` (0 left, 1 right) turns at for requested rate `w`; `gains[b][wheel]`
+// is the gain error of speed band b (bands beyond the table's use its last band).
+double RealisedWheelRate(double w, int wheel, const WheelRateErrors& e,
+                         const std::vector<std::array<double, 2>>& gains);
+
 struct ThesisOptions {
   int runs = 99;  // experiments 1..runs of Table 6-4
   uint64_t seed = 1;
@@ -41,6 +60,8 @@ struct ThesisOptions {
   double hfov_rad = 52.0 * 3.14159265358979323846 / 180.0;
   FrameTimingOptions timing{6.0, 0.4, 0.25, 0.0};
   double min_frames = 20.0;
+  WheelRateErrors wheel;
+  double stamp_step_s = 0.0;  // frames stamped on a timer of this tick (floor); 0: exact
   std::vector<std::string> filters = {"dd2", "ekf", "ukf"};
   bool batch = true;
   bool per_run = true;

@@ -1,5 +1,6 @@
 #include "kincal/thesis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -65,6 +66,27 @@ const double kThesisEstimates[99][3] = {
     {31.007, 31.295, 148.100}, {30.975, 31.287, 148.040}, {30.864, 30.589, 147.750},
 };
 
+bool WheelRateErrors::IsValid(std::string* error) const {
+  if (!(gain_sigma >= 0.0 && gain_sigma < 0.5) || !(band_width_rad_s > 0.0) ||
+      !(command_step_rad_s >= 0.0) || !(max_rad_s >= 0.0)) {
+    *error =
+        "wheel: gain_sigma in [0, 0.5), band_width_rad_s > 0, command_step_rad_s >= 0 and "
+        "max_rad_s >= 0 expected";
+    return false;
+  }
+  return true;
+}
+
+double RealisedWheelRate(double w, int wheel, const WheelRateErrors& e,
+                         const std::vector<std::array<double, 2>>& gains) {
+  if (e.command_step_rad_s > 0.0) w = std::round(w / e.command_step_rad_s) * e.command_step_rad_s;
+  if (e.max_rad_s > 0.0) w = std::clamp(w, -e.max_rad_s, e.max_rad_s);
+  if (gains.empty()) return w;
+  const size_t band =
+      std::min(gains.size() - 1, static_cast<size_t>(std::abs(w) / e.band_width_rad_s));
+  return w * (1.0 + gains[band][static_cast<size_t>(wheel)]);
+}
+
 bool ThesisOptions::IsValid(std::string* error) const {
   if (runs < 1 || runs > 99) {
     *error = "runs must be in 1..99 (Table 6-4 has 99 experiments)";
@@ -81,7 +103,11 @@ bool ThesisOptions::IsValid(std::string* error) const {
         "and hfov_rad in (0, pi)";
     return false;
   }
-  return timing.IsValid(error);
+  if (!(stamp_step_s >= 0.0 && stamp_step_s < 0.5 / timing.rate_hz)) {
+    *error = "stamp_step_s must be >= 0 and under half a frame period";
+    return false;
+  }
+  return wheel.IsValid(error) && timing.IsValid(error);
 }
 
 double Nnde(const Eigen::VectorXd& est, const Eigen::VectorXd& truth) {
@@ -128,7 +154,8 @@ struct Run {
 };
 
 struct Design {
-  ControlSignal controls{2, 0};
+  ControlSignal controls{2, 0};  // requested: what the estimators see
+  ControlSignal realised{2, 0};  // what the wheels did
   std::vector<Run> runs;
   std::vector<PoseMeasurement> all;
   std::vector<Eigen::Vector3d> starts;
@@ -138,6 +165,17 @@ Design MakeDesign(const System& truth, const Eigen::Vector3d& params, const Thes
                   const Eigen::Matrix3d& R, std::mt19937_64& rng) {
   Design d;
   std::uniform_real_distribution<double> pos(-0.2, 0.2), ang(-std::numbers::pi, std::numbers::pi);
+  // The look-up table's gain errors, per speed band and wheel (drawn only when asked, so
+  // the idealised world's random stream is unchanged).
+  std::vector<std::array<double, 2>> gains;
+  if (o.wheel.gain_sigma > 0.0) {
+    std::normal_distribution<double> g(0.0, o.wheel.gain_sigma);
+    const int bands = 1 + static_cast<int>(60.0 / o.wheel.band_width_rad_s);
+    for (int b = 0; b < bands; ++b) {
+      const double left = g(rng);
+      gains.push_back({left, g(rng)});
+    }
+  }
   TimeNs t = 0;
   for (int k = 0; k < o.runs; ++k) {
     const double wl = kThesisControls[k][0], wr = kThesisControls[k][1];
@@ -149,6 +187,9 @@ Design MakeDesign(const System& truth, const Eigen::Vector3d& params, const Thes
     run.t1 = t + SecondsToNs(duration);
     const std::array<double, 2> u = {wl, wr};
     AppendConstant(&d.controls, run.t0, run.t1, u);
+    const std::array<double, 2> real = {RealisedWheelRate(wl, 0, o.wheel, gains),
+                                        RealisedWheelRate(wr, 1, o.wheel, gains)};
+    AppendConstant(&d.realised, run.t0, run.t1, real);
     d.runs.push_back(run);
     t = run.t1 + kNsPerSecond;  // 1 s pause between experiments
   }
@@ -160,9 +201,13 @@ Design MakeDesign(const System& truth, const Eigen::Vector3d& params, const Thes
     run.start_pose = Eigen::Vector3d(sx, sy, sth);
     VecN<kMaxState> p = params;
     const StateVec x0 = truth.MakeState(run.start_pose.x(), run.start_pose.y(), run.start_pose.z(),
-                                        p, d.controls, d.controls.ToSeconds(run.t0));
-    const auto traj = SimulateTruth(truth, x0, d.controls, times);
+                                        p, d.realised, d.realised.ToSeconds(run.t0));
+    const auto traj = SimulateTruth(truth, x0, d.realised, times);
     run.meas = MeasurePoses(traj, R, k, rng);
+    if (o.stamp_step_s > 0.0) {  // stamped on a timer tick: the pose is at the true time
+      const TimeNs step = SecondsToNs(o.stamp_step_s);
+      for (auto& m : run.meas) m.t_ns = run.t0 + (m.t_ns - run.t0) / step * step;
+    }
     d.all.insert(d.all.end(), run.meas.begin(), run.meas.end());
     d.starts.push_back(run.start_pose);
   }

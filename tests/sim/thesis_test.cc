@@ -62,5 +62,52 @@ TEST(Thesis, EfficientJointEstimatorsMeetTheBoundTwoSided) {
   }
 }
 
+// Issue 18, the systematic errors the idealised world lacks: the wheels turn at the rate
+// the look-up table gives for the quantised, saturated command, off by a gain per wheel
+// and speed band.
+TEST(ThesisWheelErrors, QuantisedSaturatedAndScaledPerBand) {
+  WheelRateErrors e;
+  e.command_step_rad_s = 0.1;
+  e.max_rad_s = 40.0;
+  e.band_width_rad_s = 5.0;
+  const std::vector<std::array<double, 2>> gains = {{0.01, -0.02}, {0.0, 0.03}};
+  EXPECT_NEAR(RealisedWheelRate(2.34, 0, e, {}), 2.3, 1e-12);  // quantised only
+  EXPECT_NEAR(RealisedWheelRate(2.34, 0, e, gains), 2.3 * 1.01, 1e-12);
+  EXPECT_NEAR(RealisedWheelRate(2.34, 1, e, gains), 2.3 * 0.98, 1e-12);
+  EXPECT_NEAR(RealisedWheelRate(-7.26, 1, e, gains), -7.3 * 1.03, 1e-12);  // band 1
+  EXPECT_NEAR(RealisedWheelRate(45.3, 0, e, gains), 40.0, 1e-12);          // saturated, last band
+  WheelRateErrors none;
+  EXPECT_EQ(RealisedWheelRate(2.34, 0, none, {}), 2.34);
+  std::string error;
+  e.gain_sigma = -1;
+  EXPECT_FALSE(e.IsValid(&error));
+  EXPECT_NE(error.find("gain_sigma"), std::string::npos);
+}
+
+// The errors reach the simulated truth and not the estimators: with them the joint
+// estimate moves far beyond the bound (the bare model cannot absorb a per-band gain), and
+// the idealised result is unchanged when they are zero.
+TEST(ThesisWheelErrors, ReachTheTruthNotTheEstimators) {
+  ThesisOptions o;
+  o.runs = 20;
+  o.trials = 4;
+  o.filters = {"dd2"};
+  o.batch = false;
+  o.per_run = false;
+  const ThesisResult ideal = ReproduceThesis(o);
+  o.wheel.gain_sigma = 0.003;
+  o.wheel.command_step_rad_s = 0.1;
+  o.stamp_step_s = 0.01;
+  const ThesisResult real = ReproduceThesis(o);
+  const double ratio_ideal = ideal.joint_nnde_percent.at("dd2") / ideal.joint_bound_nnde_percent;
+  const double ratio_real = real.joint_nnde_percent.at("dd2") / real.joint_bound_nnde_percent;
+  std::cout << "joint DD2 NNDE: idealised " << ideal.joint_nnde_percent.at("dd2") << " % ("
+            << ratio_ideal << " x bound), with wheel-rate errors "
+            << real.joint_nnde_percent.at("dd2") << " % (" << ratio_real << " x bound, "
+            << 100 * real.joint_within_3sigma.at("dd2") << " % within 3 sigma)\n";
+  EXPECT_LT(ratio_ideal, 1.5);
+  EXPECT_GT(ratio_real, 10.0);
+}
+
 }  // namespace
 }  // namespace kincal
