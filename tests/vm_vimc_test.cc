@@ -75,6 +75,23 @@ std::vector<Frame> Capture(FrameSource* src, int n, std::string* error) {
   return frames;
 }
 
+// A started libcamera source and its first `n` frames (fewer, with a failure, when it
+// cannot start or deliver them).
+std::vector<Frame> StartAndCapture(const LibcameraOptions& o, int n,
+                                   std::unique_ptr<FrameSource>* src) {
+  *src = MakeLibcameraSource(o);
+  if (const Status s = (*src)->Start(); !s.ok()) {
+    ADD_FAILURE() << s.message();
+    return {};
+  }
+  std::string error;
+  std::vector<Frame> frames = Capture(src->get(), n, &error);
+  if (static_cast<int>(frames.size()) != n) {
+    ADD_FAILURE() << frames.size() << " of " << n << " frames: " << error;
+  }
+  return frames;
+}
+
 // Media-controller V4L2 before anything configured the pipeline: the capture node's
 // format does not match what the scaler sends, and the error says what is missing.
 TEST(VmVimc, V4l2OnAnUnconfiguredPipelineSaysWhatIsMissing) {
@@ -95,12 +112,9 @@ TEST(VmVimc, V4l2OnAnUnconfiguredPipelineSaysWhatIsMissing) {
 
 TEST(VmVimc, LibcameraStreamsWithSensorTimestampsAndSequenceNumbers) {
   RequireVm();
-  auto src = MakeLibcameraSource(LibcameraOptions{});
-  const Status s = src->Start();
-  ASSERT_TRUE(s.ok()) << s.message();
-  std::string error;
-  const std::vector<Frame> frames = Capture(src.get(), 40, &error);
-  ASSERT_EQ(frames.size(), 40u) << error;
+  std::unique_ptr<FrameSource> src;
+  const std::vector<Frame> frames = StartAndCapture(LibcameraOptions{}, 40, &src);
+  ASSERT_EQ(frames.size(), 40u);
   for (size_t i = 1; i < frames.size(); ++i) {
     const Frame &a = frames[i - 1], &b = frames[i];
     EXPECT_GT(b.sequence, a.sequence);
@@ -128,12 +142,9 @@ TEST(VmVimc, TheNegotiatedFormatIsConvertedToGreyCorrectly) {
   for (const PixelFormat want : {PixelFormat::kGrey, PixelFormat::kBgr24, PixelFormat::kRgb24}) {
     LibcameraOptions o;
     o.pixel_format = want;
-    auto src = MakeLibcameraSource(o);
-    const Status s = src->Start();
-    ASSERT_TRUE(s.ok()) << s.message();
-    std::string error;
-    const std::vector<Frame> frames = Capture(src.get(), 3, &error);
-    ASSERT_EQ(frames.size(), 3u) << error;
+    std::unique_ptr<FrameSource> src;
+    const std::vector<Frame> frames = StartAndCapture(o, 3, &src);
+    ASSERT_EQ(frames.size(), 3u);
     const Frame& f = frames.back();
     cv::Mat grey;
     ToGrey(f, &grey);
@@ -160,12 +171,9 @@ TEST(VmVimc, SizeAndRateAreHonouredOrReportedAsAdjusted) {
   RequireVm();
   LibcameraOptions o;
   o.fps = 10;
-  auto src = MakeLibcameraSource(o);
-  const Status s = src->Start();
-  ASSERT_TRUE(s.ok()) << s.message();
-  std::string error;
-  const std::vector<Frame> frames = Capture(src.get(), 12, &error);
-  ASSERT_EQ(frames.size(), 12u) << error;
+  std::unique_ptr<FrameSource> src;
+  const std::vector<Frame> frames = StartAndCapture(o, 12, &src);
+  ASSERT_EQ(frames.size(), 12u);
   EXPECT_EQ(frames.back().height, 480);
   const std::string name = src->name();
   if (frames.back().width != 640) {

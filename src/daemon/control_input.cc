@@ -48,11 +48,11 @@ bool DecodeControls(const void* data, size_t n, const KinematicModel& model, boo
       return false;
     }
     const double v = m.values[static_cast<size_t>(i)];
-    const double limit = PlausibleControlLimit(model.controls()[static_cast<size_t>(k)].unit);
+    const std::string& unit = model.controls()[static_cast<size_t>(k)].unit;
+    const double limit = PlausibleControlLimit(unit);
     if (!std::isfinite(v) || std::abs(v) > limit) {
       *why = "control '" + name + "' = " + std::to_string(v) +
-             ": expected a finite value within +-" + std::to_string(limit) + " " +
-             model.controls()[static_cast<size_t>(k)].unit;
+             ": expected a finite value within +-" + std::to_string(limit) + " " + unit;
       return false;
     }
     s.values[static_cast<size_t>(k)] = v;

@@ -85,16 +85,12 @@ class LibcameraSource final : public FrameSource {
                         [&] { return !done_.empty() || stop_ || disconnected_; })) {
         if (MonotonicNs() - last_completion_ > kStallNs) {
           stalled_ = true;
-          if (!AllPresent(media_nodes_)) {
-            abandoned_ = true;  // see Close()
-            *error = "libcamera: " + id_ + ": the camera's device vanished (no frame for " +
-                     std::to_string(kStallNs / kNsPerSecond) +
-                     " s, its media device is gone); libcamera cannot release a vanished "
-                     "camera, so kincald stops here: restart it when the camera is back";
-            return SourceStatus::kError;
-          }
-          *error = "libcamera: " + id_ + ": no frame for " +
-                   std::to_string(kStallNs / kNsPerSecond) + " s (camera unplugged or stalled)";
+          abandoned_ = !AllPresent(media_nodes_);  // see Close()
+          *error = fmt::format("libcamera: {}: no frame for {} s", id_, kStallNs / kNsPerSecond) +
+                   (abandoned_ ? ": the camera's device vanished (its media device is gone); "
+                                 "libcamera cannot release a vanished camera, so kincald stops "
+                                 "here: restart it when the camera is back"
+                               : " (camera unplugged or stalled)");
           return SourceStatus::kError;
         }
         return SourceStatus::kTimeout;
@@ -210,19 +206,12 @@ class LibcameraSource final : public FrameSource {
     lc::ControlList controls;
     if (opt_.fps <= 0) return controls;
     if (camera_->controls().count(&lc::controls::FrameDurationLimits) == 0) {
-      AddNote("no frame-rate control: the camera's own rate, not " + Fmt(opt_.fps) + " fps");
+      AddNote(fmt::format("no frame-rate control: the camera's own rate, not {:g} fps", opt_.fps));
       return controls;
     }
     const auto us = static_cast<int64_t>(1e6 / opt_.fps);
     controls.set(lc::controls::FrameDurationLimits, lc::Span<const int64_t, 2>({us, us}));
     return controls;
-  }
-
-  static std::string Fmt(double v) {
-    std::string s = std::to_string(v);
-    s.erase(s.find_last_not_of('0') + 1);
-    if (!s.empty() && s.back() == '.') s.pop_back();
-    return s;
   }
 
   void AddNote(const std::string& note) {

@@ -84,40 +84,6 @@ TEST(Config, AWrongChoiceNamesFileLineKeyAndTheChoices) {
             src + ":1: key 'source': expected sim, v4l2, libcamera or replay, got 'usb'");
 }
 
-TEST(Config, EachSectionSaysWhatItExpects) {
-  DaemonConfig c;
-  std::string error;
-  ASSERT_TRUE(c.IsValid(&error)) << error;
-  c.v4l2.buffers = 2;
-  EXPECT_TRUE(c.IsValid(&error)) << "the v4l2 section is checked only when it is the source";
-  c.source = SourceKind::kV4l2;
-  EXPECT_FALSE(c.IsValid(&error));
-  EXPECT_EQ(error, "v4l2.buffers must be 4..32");
-  c = DaemonConfig{};
-  c.v4l2.pixel_format = PixelFormat::kPng;  // a recording's encoding, not a camera's
-  c.source = SourceKind::kV4l2;
-  EXPECT_FALSE(c.v4l2.IsValid(&error));
-  EXPECT_EQ(error, "v4l2.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3 (got 'PNG')");
-  c = DaemonConfig{};
-  c.filter.type = "kalman";
-  EXPECT_FALSE(c.IsValid(&error));
-  EXPECT_NE(error.find("filter.type: unknown filter 'kalman' (known: "), std::string::npos)
-      << error;
-  c = DaemonConfig{};
-  c.robot.guess["wheel_base"] = 0.3;
-  EXPECT_FALSE(c.IsValid(&error));
-  EXPECT_EQ(error, "robot.guess: model 'diffdrive' with its effects has no parameter 'wheel_base'");
-  c = DaemonConfig{};
-  c.filter.control_psd = {1e-4};
-  EXPECT_FALSE(c.IsValid(&error));
-  EXPECT_EQ(error, "filter.control_psd needs 2 values for model diffdrive");
-  c = DaemonConfig{};
-  c.target.height_m = 2.5;  // above the nadir camera at 2 m
-  EXPECT_FALSE(c.IsValid(&error));
-  EXPECT_EQ(error, "target.height_m must be >= 0 and below the camera");
-  EXPECT_THROW(Validate(c), std::runtime_error);
-}
-
 // The same through the daemon's own checks, on every shipped config and on bad files.
 TEST(DaemonConfig, EveryShippedConfigLoadsAndValidates) {
   int n = 0;

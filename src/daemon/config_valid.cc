@@ -1,0 +1,201 @@
+// kincald configuration: the checks of every options struct and of the whole config
+// (loading is in config.cc).
+#include <stdexcept>
+#include <string>
+
+#include "kincal/daemon/config.h"
+#include "kincal/estimation/filter.h"
+#include "kincal/model.h"
+#include "kincal/system.h"
+
+namespace kincal::daemon {
+
+namespace {
+
+// Sets *error to `what` and returns false when !ok (for chains of checks).
+bool Expect(bool ok, const std::string& what, std::string* error) {
+  if (!ok) *error = what;
+  return ok;
+}
+
+}  // namespace
+
+bool LcmOptions::IsValid(std::string* error) const {
+  for (const auto* ch : {&controls_channel, &pose_channel, &params_channel, &health_channel,
+                         &model_check_channel, &markers_channel, &frame_channel}) {
+    if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
+                error)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool V4l2Options::IsValid(std::string* error) const {
+  return Expect(width > 0 && height > 0, "v4l2.width/height must be > 0", error) &&
+         Expect(fps > 0, "v4l2.fps must be > 0", error) &&
+         Expect(buffers >= 4 && buffers <= 32, "v4l2.buffers must be 4..32", error) &&
+         Expect(pixel_format != PixelFormat::kPng,
+                "v4l2.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3 (got '" +
+                    std::string(PixelFormatName(pixel_format)) + "')",
+                error);
+}
+
+bool LibcameraOptions::IsValid(std::string* error) const {
+  return Expect(width > 0 && height > 0, "libcamera.width/height must be > 0", error) &&
+         Expect(buffers >= 2 && buffers <= 32, "libcamera.buffers must be 2..32", error) &&
+         Expect(fps >= 0 && fps <= 1000, "libcamera.fps must be in [0, 1000] (0: the camera's)",
+                error) &&
+         Expect(pixel_format != PixelFormat::kPng,
+                "libcamera.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3", error);
+}
+
+bool SimOptions::IsValid(std::string* error) const {
+  return Expect(!scenario.empty(), "sim.scenario must name a scenario file", error) &&
+         Expect(duration_s >= 0 && margin_px >= 0 && carry_s >= 0 && noise_grey >= 0,
+                "sim.duration_s, margin_px, carry_s, noise_grey must be >= 0", error) &&
+         Expect(duration_s <= kMaxSimDurationS,
+                "sim.duration_s must be at most " +
+                    std::to_string(static_cast<int64_t>(kMaxSimDurationS)) +
+                    " s (30 days); 0 takes the scenario's",
+                error) &&
+         Expect(chunk_s >= 1.0 && chunk_s <= 3600.0, "sim.chunk_s must be in [1, 3600] s", error) &&
+         Expect(reflection_prob >= 0 && reflection_prob <= 1 && occlusion_prob >= 0 &&
+                    occlusion_prob <= 1,
+                "sim.reflection_prob and occlusion_prob must be in [0, 1]", error);
+}
+
+bool ReplayOptions::IsValid(std::string* error) const {
+  return Expect(!path.empty(), "replay.path (or --replay FILE) must name an LCM log", error) &&
+         Expect(speed >= 0, "replay.speed must be >= 0 (0: --fast)", error) &&
+         Expect(loops >= 1, "replay.loops must be >= 1", error);
+}
+
+bool CameraOptions::IsValid(std::string* error) const {
+  return Expect(nadir_height_m > 0, "camera.nadir_height_m must be > 0", error);
+}
+
+bool TargetOptions::IsValid(std::string* error) const {
+  return Expect(height_m >= 0, "target.height_m must be >= 0 and below the camera", error);
+}
+
+bool PoseOptions::IsValid(std::string* error) const {
+  return Expect(sigma_px > 0 && max_rms_px > 0, "pose.sigma_px and max_rms_px must be > 0", error);
+}
+
+bool RobotOptions::IsValid(std::string* error) const {
+  if (!Expect(max_control_delay_s >= 0, "robot.max_control_delay_s must be >= 0", error) ||
+      !Expect(guess_sigma_fraction > 0, "robot.guess_sigma_fraction must be > 0", error)) {
+    return false;
+  }
+  std::unique_ptr<System> sys;
+  if (const Status s = MakeSystem(model, effects, {}, &sys); !s.ok()) {
+    *error = "robot: " + s.message();
+    return false;
+  }
+  for (const auto& [name, v] : guess) {
+    if (!Expect(
+            sys->ParamIndex(name) >= 0,
+            "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
+            error)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool FilterOptions::IsValid(std::string* error) const {
+  if (!FilterRegistry::Instance().Has(type)) {
+    *error = "filter.type: unknown filter '" + type +
+             "' (known: " + FilterRegistry::Instance().KnownList() + ")";
+    return false;
+  }
+  for (double v : control_psd) {
+    if (!Expect(v >= 0, "filter.control_psd must be >= 0", error)) return false;
+  }
+  for (double v : pose_psd) {
+    if (!Expect(v >= 0, "filter.pose_psd must be >= 0", error)) return false;
+  }
+  return Expect(max_pose_gap_s > 0 && params_rate_hz >= 0 && control_history_s > 0,
+                "filter.max_pose_gap_s, control_history_s must be > 0, params_rate_hz >= 0",
+                error) &&
+         Expect(gate_nis >= 0 && divergence_gated >= 1,
+                "filter.gate_nis >= 0, divergence_gated >= 1", error) &&
+         Expect(batch_window_s > 0 && batch_window_s <= control_history_s,
+                "filter.batch_window_s must be in (0, control_history_s]", error);
+}
+
+bool QueueOptions::IsValid(std::string* error) const {
+  // Upper bounds keep memory bounded by the configuration: a frame slot holds a whole
+  // image, the others a sample or a log event each.
+  return Expect(frames >= 2 && poses >= 2 && controls >= 2 && recorder >= 16,
+                "queues: frames, poses, controls >= 2, recorder >= 16", error) &&
+         Expect(frames <= 256 && poses <= 65536 && controls <= 65536 && recorder <= 1 << 20,
+                "queues: frames <= 256 (each holds a whole image), poses and controls <= 65536, "
+                "recorder <= 1048576",
+                error);
+}
+
+bool RecordOptions::IsValid(std::string* error) const {
+  return Expect(flush_every_s > 0, "record.flush_every_s must be > 0", error);
+}
+
+bool CheckpointOptions::IsValid(std::string* error) const {
+  return Expect(every_s > 0, "checkpoint.every_s must be > 0", error);
+}
+
+bool DaemonConfig::IsValid(std::string* error) const {
+  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
+      !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
+    return false;
+  }
+  switch (source) {
+    case SourceKind::kV4l2:
+      if (!v4l2.IsValid(error)) return false;
+      break;
+    case SourceKind::kLibcamera:
+      if (!libcamera.IsValid(error)) return false;
+      break;
+    case SourceKind::kSim:
+      if (!sim.IsValid(error)) return false;
+      break;
+    case SourceKind::kReplay:
+      if (!replay.IsValid(error)) return false;
+      break;
+  }
+  if (source == SourceKind::kSim && sim.controls_via_lcm && sim.speed != 1.0 &&
+      robot.control_stamp != ControlStamp::kSender) {
+    *error =
+        "sim.controls_via_lcm at sim.speed != 1: receive stamps are wall-clock times, the "
+        "simulation's are not; set robot.control_stamp: sender";
+    return false;
+  }
+  if (!camera.IsValid(error) || !target.IsValid(error)) return false;
+  if (!Expect(target.height_m < camera.nadir_height_m || !camera.floor.empty(),
+              "target.height_m must be >= 0 and below the camera", error)) {
+    return false;
+  }
+  std::string detector_error;
+  if (!detector.IsValid(&detector_error)) {
+    *error = "detector: " + detector_error;
+    return false;
+  }
+  if (!pose.IsValid(error) || !robot.IsValid(error) || !filter.IsValid(error)) return false;
+  if (!filter.control_psd.empty()) {
+    const int controls = MakeModel(robot.model)->num_controls();  // robot.IsValid: it exists
+    if (!Expect(static_cast<int>(filter.control_psd.size()) == controls,
+                "filter.control_psd needs " + std::to_string(controls) + " values for model " +
+                    robot.model,
+                error)) {
+      return false;
+    }
+  }
+  return queues.IsValid(error) && record.IsValid(error) && checkpoint.IsValid(error);
+}
+
+void Validate(const DaemonConfig& c) {
+  std::string error;
+  if (!c.IsValid(&error)) throw std::runtime_error("config: " + error);
+}
+
+}  // namespace kincal::daemon
