@@ -13,23 +13,6 @@ constexpr int kCentreNoiseFrames = 200;
 constexpr double kMinCentreVariance = 4e-6;
 
 }  // namespace
-namespace {
-
-Eigen::Vector3d FloorPoseOf(const vision::FloorExtrinsics& floor, const vision::Pose3& p) {
-  const Eigen::Matrix3d Rft = floor.R_cf.transpose() * p.R;
-  const Eigen::Vector3d o = floor.R_cf.transpose() * (p.t - floor.t_cf);
-  return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
-}
-
-vision::Pose3 CameraPoseOf(const vision::FloorExtrinsics& floor, const Eigen::Vector3d& xyt,
-                           double height) {
-  vision::Pose3 p;
-  p.R = floor.R_cf * Eigen::AngleAxisd(xyt.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  p.t = floor.R_cf * Eigen::Vector3d(xyt.x(), xyt.y(), height) + floor.t_cf;
-  return p;
-}
-
-}  // namespace
 
 PoseStage::PoseStage(const PoseOptions& pose, const vision::DetectorOptions& detector,
                      const VisionSetup& v)
@@ -70,9 +53,9 @@ bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
     // The centre of a marker's image is not the image of its centre: correct by the
     // current pose and solve once more.
     if (p->valid) {
-      vision::CorrectPerspectiveBias(vis_.camera,
-                                     CameraPoseOf(vis_.floor, p->xytheta, vis_.target_height_m),
-                                     vis_.layout, &markers);
+      vision::CorrectPerspectiveBias(
+          vis_.camera, vision::CameraPoseOnFloor(vis_.floor, p->xytheta, vis_.target_height_m),
+          vis_.layout, &markers);
       Solve(markers, p);
     }
   }
@@ -96,7 +79,7 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
   vision::Pose3 pose3;
   if (!have_last_ || opt_.method == PoseMethod::kLowe) {
     if (!vision::PlanarInitialPose(o, n, &pose3)) return;
-    init = FloorPoseOf(vis_.floor, pose3);
+    init = vision::FloorPoseOf(vis_.floor, pose3);
   }
   if (opt_.method == PoseMethod::kGroundPlane) {
     const auto r = vision::GroundPlanePose(vis_.floor, vis_.target_height_m, o, n, init,
@@ -106,16 +89,11 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
     p->covariance = r.covariance;
     p->rms_px = r.rms_px;
   } else {
-    const auto r = vision::LowePose(o, n, pose3, vis_.camera.fx, opt_.sigma_px);
-    if (!r.ok || !(r.rms_px <= opt_.max_rms_px)) return;
-    p->xytheta = FloorPoseOf(vis_.floor, r.pose);
-    // (x, y) are linear in the translation D; theta moves with the floor-z component of
-    // the rotation increment.
-    Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
-    const Eigen::Matrix3d Rfc = vis_.floor.R_cf.transpose();
-    J.block<2, 3>(0, 0) = Rfc.topRows<2>();
-    J.block<1, 3>(2, 3) = Rfc.row(2);
-    p->covariance = J * r.covariance * J.transpose();
+    const auto lowe = vision::LevelLowePose(vis_.floor, o, n, pose3, vis_.camera.fx, opt_.sigma_px);
+    if (!lowe.ok || !(lowe.rms_px <= opt_.max_rms_px)) return;
+    const vision::PlanarPose r = vision::FloorPoseFromLowe(vis_.floor, lowe);
+    p->xytheta = r.xytheta;
+    p->covariance = r.covariance;
     p->rms_px = r.rms_px;
   }
   p->xytheta.z() = WrapAngle(p->xytheta.z());

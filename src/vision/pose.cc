@@ -1,6 +1,7 @@
 #include "kincal/vision/pose.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 namespace kincal::vision {
@@ -183,6 +184,68 @@ PlanarPose GroundPlanePose(const FloorExtrinsics& floor, double target_height_m,
   r.covariance = H.inverse() * sn * sn;
   r.ok = r.covariance.allFinite();
   return r;
+}
+
+namespace {
+
+// A tilted solution is taken over a level one only when it fits the centres better by
+// this many sigma^2 (the residual has 2 degrees of freedom for 4 markers: chance alone
+// makes 9 sigma^2 in one frame of a hundred).
+constexpr double kClearlyBetter = 25.0;
+
+// Angle between the target's plane and the floor.
+double TiltFromFloor(const FloorExtrinsics& floor, const Pose3& pose) {
+  const double c = (floor.R_cf.transpose() * pose.R)(2, 2);
+  return std::acos(std::clamp(c, -1.0, 1.0));
+}
+
+}  // namespace
+
+LoweResult LevelLowePose(const FloorExtrinsics& floor, std::span<const Eigen::Vector3d> object,
+                         std::span<const Eigen::Vector2d> normalized, const Pose3& initial,
+                         double fx, double sigma_px) {
+  const LoweResult a = LowePose(object, normalized, initial, fx, sigma_px);
+  Pose3 level = initial;
+  const Eigen::Vector3d xyt = FloorPoseOf(floor, initial);
+  level.R = floor.R_cf * Eigen::AngleAxisd(xyt.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const LoweResult b = LowePose(object, normalized, level, fx, sigma_px);
+  if (!a.ok) return b;
+  if (!b.ok) return a;
+  const double n = static_cast<double>(object.size());
+  const double rss_a = a.rms_px * a.rms_px * n, rss_b = b.rms_px * b.rms_px * n;
+  const bool a_level = TiltFromFloor(floor, a.pose) <= TiltFromFloor(floor, b.pose);
+  const LoweResult& more = a_level ? a : b;
+  const LoweResult& less = a_level ? b : a;
+  const double rss_more = a_level ? rss_a : rss_b, rss_less = a_level ? rss_b : rss_a;
+  return rss_more - rss_less > kClearlyBetter * sigma_px * sigma_px ? less : more;
+}
+
+Eigen::Vector3d FloorPoseOf(const FloorExtrinsics& floor, const Pose3& pose) {
+  const Eigen::Matrix3d Rft = floor.R_cf.transpose() * pose.R;
+  const Eigen::Vector3d o = floor.R_cf.transpose() * (pose.t - floor.t_cf);
+  return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
+}
+
+PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& lowe) {
+  PlanarPose out;
+  const Eigen::Matrix3d Rfc = floor.R_cf.transpose();
+  out.xytheta = FloorPoseOf(floor, lowe.pose);
+  Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
+  J.block<2, 3>(0, 0) = Rfc.topRows<2>();
+  J.block<1, 3>(2, 3) = Rfc.row(2);
+  out.covariance = J * lowe.covariance * J.transpose();
+  out.rms_px = lowe.rms_px;
+  out.iterations = lowe.iterations;
+  out.ok = lowe.ok;
+  return out;
+}
+
+Pose3 CameraPoseOnFloor(const FloorExtrinsics& floor, const Eigen::Vector3d& xytheta,
+                        double target_height_m) {
+  Pose3 p;
+  p.R = floor.R_cf * Eigen::AngleAxisd(xytheta.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  p.t = floor.R_cf * Eigen::Vector3d(xytheta.x(), xytheta.y(), target_height_m) + floor.t_cf;
+  return p;
 }
 
 }  // namespace kincal::vision

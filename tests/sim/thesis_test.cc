@@ -111,3 +111,51 @@ TEST(ThesisWheelErrors, ReachTheTruthNotTheEstimators) {
 
 }  // namespace
 }  // namespace kincal
+
+namespace kincal {
+namespace {
+
+// Table 6-5's per-run statistics against the nominal robot, as docs/thesis.md quotes them.
+TEST(Thesis, TableStatistics) {
+  const TableStats s = ThesisTableStats();
+  EXPECT_NEAR(100 * s.mean_nnde, 0.709, 0.001);
+  EXPECT_NEAR(100 * s.nnde_of_mean, 0.465, 0.001);
+  EXPECT_NEAR(100 * s.speed_scatter, 0.256, 0.002);
+  EXPECT_NEAR(100 * s.turn_scatter, 0.072, 0.001);
+}
+
+// Issue 18: the realistic world. Poses through the Table 6-3 camera's pixels, wheels on a
+// look-up table with gain errors per band, 0.1 rad/s commands, a 10 ms timer, 128 frames
+// per run, estimators started at the nominal robot. The bare model cannot absorb the
+// gains and claims a hundred times too much; with the gains as nuisance parameters DD2
+// reaches 0.1 % and its NEES comes down to the few-times-3 that the poses' own small
+// biases through pixels leave (docs/thesis.md: about 0.1-0.4 mm at 0.14 px, measured;
+// over trials the NEES averages about 3 times its chi-square mean). The per-run
+// turn-rate scatter is Table 6-5's (the tuned value).
+TEST(ThesisRealistic, JointDd2WithNuisanceGainsReachesTargetHonestly) {
+  ThesisOptions o = ThesisOptions::Realistic();
+  o.seed = 18;
+  o.filters = {"dd2"};
+  o.batch = false;
+  const ThesisResult r = ReproduceThesis(o);
+  const double dd2 = r.joint_nnde_percent.at("dd2"), gains = r.joint_nnde_percent.at("dd2+gains");
+  const TableStats& s = r.per_run_stats.at("dd2");
+  std::cout << "pose NEES " << r.pose_nees << ", " << r.frames_lost << " of "
+            << r.frames + r.frames_lost << " frames lost; joint DD2 bare " << dd2 << " % (NEES "
+            << r.joint_nees.at("dd2") << "), with gains " << gains << " % (NEES "
+            << r.joint_nees.at("dd2+gains") << ", bound " << r.joint_gains_bound_nnde_percent
+            << " %); per run: speed scatter " << 100 * s.speed_scatter << " %, turn scatter "
+            << 100 * s.turn_scatter << " % (Table 6-5: 0.256, 0.072)\n";
+  EXPECT_GT(r.pose_nees, 2.5);
+  EXPECT_LT(r.pose_nees, 4.2);
+  EXPECT_LT(r.frames_lost, r.frames / 30);
+  EXPECT_LE(gains, 0.1);
+  EXPECT_GE(r.joint_within_3sigma.at("dd2+gains"), 2.0 / 3.0);
+  EXPECT_LT(r.joint_nees.at("dd2+gains"), 25.0);
+  EXPECT_GT(r.joint_nees.at("dd2"), 100.0);  // the bare model claims too much
+  EXPECT_GT(s.turn_scatter, 0.5 * 0.00072);
+  EXPECT_LT(s.turn_scatter, 2.0 * 0.00072);
+}
+
+}  // namespace
+}  // namespace kincal

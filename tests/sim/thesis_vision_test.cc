@@ -1,0 +1,91 @@
+// The thesis's camera (Table 6-3) and poses measured through its pixels.
+#include "kincal/thesis_vision.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "kincal/angles.h"
+
+namespace kincal {
+namespace {
+
+TEST(ThesisVision, CameraIsTable63) {
+  const ThesisVision v = ThesisTable63Vision();
+  EXPECT_EQ(v.camera.width, 320);
+  EXPECT_EQ(v.camera.height, 240);
+  EXPECT_DOUBLE_EQ(v.camera.cx, 151.51);
+  // Heikkila's k1 on millimetres, converted with f = 6.8313 mm.
+  EXPECT_NEAR(v.camera.k1, -6.522413e-3 * 6.8313 * 6.8313, 1e-12);
+  // The optical axis: 19.3 deg of tilt and 2.0 deg of roll, about 19.4 deg from the
+  // vertical; the camera 1.589 m up.
+  const Eigen::Vector3d axis = v.floor.R_cf.row(2).transpose();
+  const double off_vertical = std::acos(-axis.z()) * 180.0 / std::numbers::pi;
+  EXPECT_NEAR(off_vertical, std::hypot(19.30, 1.99), 0.05);
+  const Eigen::Vector3d centre = -v.floor.R_cf.transpose() * v.floor.t_cf;
+  EXPECT_NEAR(centre.z(), 1.58911, 1e-9);
+  // The axis meets the floor at the origin, where the plate is in view.
+  const Eigen::Vector3d hit = centre + axis * (-centre.z() / axis.z());
+  EXPECT_NEAR(hit.head<2>().norm(), 0.0, 1e-9);
+  EXPECT_TRUE(PlateInView(v, Eigen::Vector3d(0.0, 0.0, 0.7), 6.0));
+  EXPECT_FALSE(PlateInView(v, Eigen::Vector3d(2.0, 0.0, 0.7), 6.0));
+  // The 20 mm markers image at the thesis's 5-10 px (§7.3.3).
+  const vision::Pose3 p = vision::CameraPoseOnFloor(v.floor, Eigen::Vector3d::Zero(), 0.1);
+  const double px = v.camera.fx * 2.0 * v.layout.marker_radius_m / p.t.norm();
+  EXPECT_GT(px, 5.0);
+  EXPECT_LT(px, 10.0);
+}
+
+// The images' noise is set by what it does to the centres: the thesis's variance of
+// 0.02 px^2 (sigma 0.1414 px), measured back within sampling error.
+TEST(PixelPoseMeter, CentresScatterAtTheRequestedSigma) {
+  std::mt19937_64 rng(3);
+  PixelPoseOptions o;
+  o.calibration_frames = 128;
+  const PixelPoseMeter m(ThesisTable63Vision(), o, rng);
+  std::cout << "image noise " << m.image_noise_grey() << " grey levels -> centres scatter "
+            << m.measured_centroid_sigma_px() << " px\n";
+  EXPECT_NEAR(m.measured_centroid_sigma_px(), 0.1414, 0.1414 * 0.1);
+  EXPECT_GT(m.image_noise_grey(), 1.0);
+}
+
+// Poses through pixels against the truth: the covariance describes the errors (pose
+// NEES near 3) and no heading is off by a mirrored tilt.
+TEST(PixelPoseMeter, PosesWithinTheirCovarianceAndNoMirroredTilts) {
+  std::mt19937_64 rng(5);
+  PixelPoseMeter m(ThesisTable63Vision(), PixelPoseOptions{}, rng);
+  std::uniform_real_distribution<double> pos(-0.5, 0.5), ang(-std::numbers::pi, std::numbers::pi);
+  int n = 0, lost = 0;
+  double nees = 0.0, worst = 0.0;
+  Eigen::Vector3d sq = Eigen::Vector3d::Zero();
+  while (n + lost < 400) {
+    const Eigen::Vector3d truth(pos(rng), pos(rng), ang(rng));
+    if (!PlateInView(m.vision(), truth, 6.0)) continue;
+    Eigen::Vector3d z;
+    Eigen::Matrix3d R;
+    if (!m.Measure(truth, rng, &z, &R)) {
+      ++lost;
+      continue;
+    }
+    Eigen::Vector3d e = z - truth;
+    e.z() = WrapAngle(e.z());
+    nees += e.dot(R.ldlt().solve(e));
+    sq += e.cwiseAbs2();
+    worst = std::max(worst, std::abs(e.z()));
+    ++n;
+  }
+  nees /= n;
+  const Eigen::Vector3d rms = (sq / n).cwiseSqrt();
+  std::cout << n << " poses, " << lost << " lost: RMS error x " << rms.x() * 1e3 << " mm, y "
+            << rms.y() * 1e3 << " mm, theta " << rms.z() * 1e3 << " mrad; NEES " << nees
+            << "; worst heading " << worst << " rad\n";
+  EXPECT_LE(lost, 12);
+  EXPECT_GT(nees, 2.4);
+  EXPECT_LT(nees, 4.0);
+  EXPECT_LT(worst, 0.06);
+  EXPECT_LT(rms.head<2>().norm(), 0.01);
+}
+
+}  // namespace
+}  // namespace kincal
