@@ -37,6 +37,11 @@ struct Overrides {
 };
 
 void PrintJoint(const ThesisResult& r) {
+  if (!r.poses_gated.empty()) {
+    std::cout << "  poses refused at the filters' innovation gate (NIS > 25), all trials:";
+    for (const auto& [name, n] : r.poses_gated) std::cout << " " << name << " " << n;
+    std::cout << "\n";
+  }
   std::cout << "  Joint calibration over all runs (NNDE %, RMS over trials; NEES: mean over "
                "trials, 3 when honest):\n";
   for (const auto& [name, v] : r.joint_nnde_percent) {
@@ -114,6 +119,8 @@ nlohmann::json ToJson(const ThesisOptions& o, const ThesisResult& r) {
   j["seed"] = o.seed;
   j["frames_per_trial"] = r.frames;
   j["frames_lost"] = r.frames_lost;
+  j["frames_gross"] = r.frames_gross;
+  j["poses_gated"] = r.poses_gated;
   j["pose_sigma"] = {std::sqrt(r.pose_cov(0, 0)), std::sqrt(r.pose_cov(1, 1)),
                      std::sqrt(r.pose_cov(2, 2))};
   j["pose_rms_error"] = {r.pose_rms_error[0], r.pose_rms_error[1], r.pose_rms_error[2]};
@@ -151,7 +158,8 @@ void PrintSetup(const ThesisOptions& o, const ThesisResult& r) {
               << " px; pose error RMS x " << r.pose_rms_error[0] * 1e3 << " mm, y "
               << r.pose_rms_error[1] * 1e3 << " mm, theta " << r.pose_rms_error[2] * 1e3
               << " mrad, pose NEES " << r.pose_nees << " (3 when honest), " << r.frames_lost
-              << " frames lost\n  wheel gain sigma " << o.wheel.gain_sigma << " per "
+              << " frames lost, " << r.frames_gross
+              << " gross errors (NEES > 100)\n  wheel gain sigma " << o.wheel.gain_sigma << " per "
               << o.wheel.band_width_rad_s << " rad/s band, command step "
               << o.wheel.command_step_rad_s << " rad/s, stamp tick " << o.stamp_step_s
               << " s; estimators start at the nominal robot\n";

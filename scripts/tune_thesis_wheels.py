@@ -7,6 +7,8 @@ wheel-rate error moves the speed's relative scatter more than the turn rate's, a
 poses' own errors move only the speed).
 
     scripts/tune_thesis_wheels.py [--sigmas 0,0.0002,0.0005,0.001] [--trials 3] [--out F.json]
+
+KINCAL_BIN names another kincal binary (default build/bin/kincal).
 """
 import argparse
 import json
@@ -21,7 +23,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 def run(sigma, trials, seed):
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "r.json")
-        cmd = [os.path.join(ROOT, "build", "bin", "kincal"), "reproduce", "thesis",
+        kincal = os.environ.get("KINCAL_BIN", os.path.join(ROOT, "build", "bin", "kincal"))
+        cmd = [kincal, "reproduce", "thesis",
                "--realistic", "--filters", "dd2", "--no-batch", "--trials", str(trials),
                "--seed", str(seed), "--wheel-gain-sigma", str(sigma), "--json", out]
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)

@@ -140,10 +140,14 @@ struct ThesisResult {
   // Last trial: per-run estimates and 1-sigma of each filter, and the truth.
   std::map<std::string, std::vector<Eigen::Vector3d>> per_run_estimate, per_run_sigma;
   Eigen::Vector3d truth = Eigen::Vector3d::Zero();
-  // Pose measurement through pixels: frames not measured, the RMS pose error against the
-  // truth (m, m, rad), the mean pose NEES (3 when the covariance is honest), the image
-  // noise chosen and the centre scatter it gives.
-  int frames_lost = 0;
+  // Pose measurement through pixels: frames not measured, gross errors (pose NEES > 100: a
+  // marker taken for another; left in the data), the RMS pose error against the truth
+  // (m, m, rad) and the mean pose NEES (3 when the covariance is honest) of the others,
+  // the image noise chosen and the centre scatter it gives.
+  int frames_lost = 0, frames_gross = 0;
+  // Poses each joint filter refused at its innovation gate (through pixels only), over
+  // all trials.
+  std::map<std::string, int> poses_gated;
   Eigen::Vector3d pose_rms_error = Eigen::Vector3d::Zero();
   double pose_nees = 0.0;
   double image_noise_grey = 0.0, centroid_sigma_px = 0.0;

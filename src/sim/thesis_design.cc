@@ -12,6 +12,9 @@ namespace {
 // Placement tries per run, and the margin the plate keeps from the frame's edge (px).
 constexpr int kPlacementTries = 4000;
 constexpr double kPlacementMarginPx = 6.0;
+// A pose error this far beyond its covariance is a gross error (a wrong marker), counted
+// apart from the pose statistics.
+constexpr double kGrossNees = 100.0;
 
 std::vector<std::array<double, 2>> DrawGains(const WheelRateErrors& w, std::mt19937_64& rng) {
   std::vector<std::array<double, 2>> gains;
@@ -145,13 +148,22 @@ void MeasureRun(const System& truth, const Eigen::Vector3d& params, const Thesis
     }
     Eigen::Vector3d e = m.z - tp.target;
     e.z() = WrapAngle(e.z());
-    st.sum_sq += e.cwiseAbs2();
-    st.sum_nees += e.dot(m.R.ldlt().solve(e));
+    const double nees = e.dot(m.R.ldlt().solve(e));
+    if (nees > kGrossNees) {
+      ++st.gross;  // kept in the data (the estimators must cope), not in the statistics
+    } else {
+      st.sum_sq += e.cwiseAbs2();
+      st.sum_nees += nees;
+    }
     run->meas.push_back(m);
   }
   StampOnTick(o, run->t0, &run->meas);
   if (o.stamp_step_s > 0.0) {
+    // The estimators know the tick: the true time lies within [stamp, stamp + tick), so
+    // they take its middle and the uniform spread's variance.
+    const TimeNs half = SecondsToNs(0.5 * o.stamp_step_s);
     for (auto& m : run->meas) {
+      m.t_ns += half;
       m.R += TickCovariance(o, kThesisControls[run->index][0], kThesisControls[run->index][1],
                             m.z.z());
     }
@@ -169,7 +181,7 @@ ThesisDesign RealisticDesign(const System& truth, const Eigen::Vector3d& params,
     run.index = k;
     run.t0 = t;
     const auto times = RunFrameTimes(run.t0, o.frames_per_run, o.timing, rng);
-    run.t1 = times.back() + 1;
+    run.t1 = times.back() + SecondsToNs(1.0 / o.timing.rate_hz);  // stops a frame later
     const std::array<double, 2> u = {kThesisControls[k][0], kThesisControls[k][1]};
     AppendConstant(&d.controls, run.t0, run.t1, u);
     AppendConstant(&d.realised, run.t0, run.t1, Realised(o, d, k));

@@ -22,7 +22,7 @@ struct ThesisRun {
 
 // Pose errors against the truth of the measurements made through pixels.
 struct PoseErrorStats {
-  int frames = 0, lost = 0;
+  int frames = 0, lost = 0, gross = 0;  // gross: NEES > 100, not in the sums
   Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
   double sum_nees = 0.0;
 };
