@@ -27,8 +27,8 @@ constexpr std::array<Named<ControlStamp>, 3> kControlStampNames{
     {{"receive", ControlStamp::kReceive},
      {"sender", ControlStamp::kSender},
      {"mapped", ControlStamp::kMapped}}};
-constexpr std::array<Named<FrameEncoding>, 2> kFrameEncodingNames{
-    {{"raw", FrameEncoding::kRaw}, {"png", FrameEncoding::kPng}}};
+constexpr std::array<Named<FrameEncoding>, 3> kFrameEncodingNames{
+    {{"raw", FrameEncoding::kRaw}, {"png", FrameEncoding::kPng}, {"jpeg", FrameEncoding::kJpeg}}};
 // Pixel formats a camera can be asked for (PNG is only a recorded frame's encoding).
 constexpr std::array<Named<PixelFormat>, 5> kCameraFormatNames{{{"GREY", PixelFormat::kGrey},
                                                                 {"YUYV", PixelFormat::kYuyv},

@@ -159,9 +159,11 @@ void ToGrey(const Frame& f, cv::Mat* grey) {
         throw FrameError(std::string(PixelFormatName(f.format)) + " frame: " + why);
       const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1,
                         const_cast<uint8_t*>(f.data.data()));
-      cv::Mat decoded;
+      // Straight to grey (libjpeg-turbo then skips the chroma's inverse DCT and the colour
+      // conversion), into the caller's buffer: no allocation once its size is set.
+      cv::Mat& decoded = *grey;
       try {
-        decoded = cv::imdecode(buf, cv::IMREAD_GRAYSCALE);
+        cv::imdecode(buf, cv::IMREAD_GRAYSCALE, &decoded);
       } catch (const cv::Exception& e) {
         throw FrameError(std::string(PixelFormatName(f.format)) +
                          " frame: decoder error: " + e.what());
@@ -174,7 +176,6 @@ void ToGrey(const Frame& f, cv::Mat* grey) {
                          std::to_string(decoded.cols) + "x" + std::to_string(decoded.rows) +
                          ", expected " + std::to_string(f.width) + "x" + std::to_string(f.height));
       }
-      decoded.copyTo(*grey);
       return;
     }
   }

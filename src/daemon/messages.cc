@@ -6,6 +6,13 @@
 #include <opencv2/imgcodecs.hpp>
 
 namespace kincal::daemon {
+namespace {
+
+// JPEG quality of recorded grey frames (frame_encoding: jpeg): high enough that marker
+// centres move by less than their noise (a webcam's own MJPG is typically 75-90).
+constexpr int kJpegQuality = 95;
+
+}  // namespace
 
 void FillFrameMessage(const Frame& f, FrameEncoding encoding, std::vector<uint8_t>* png,
                       kincal::frame_t* m) {
@@ -16,11 +23,16 @@ void FillFrameMessage(const Frame& f, FrameEncoding encoding, std::vector<uint8_
   m->width = f.width;
   m->height = f.height;
   m->stride = f.stride;
-  if (encoding == FrameEncoding::kPng && f.format == PixelFormat::kGrey) {
+  if (encoding != FrameEncoding::kRaw && f.format == PixelFormat::kGrey) {
     cv::Mat grey;
     ToGrey(f, &grey);
-    cv::imencode(".png", grey, *png);
-    m->pixel_format = "PNG";
+    if (encoding == FrameEncoding::kPng) {
+      cv::imencode(".png", grey, *png);
+      m->pixel_format = "PNG";
+    } else {
+      cv::imencode(".jpg", grey, *png, {cv::IMWRITE_JPEG_QUALITY, kJpegQuality});
+      m->pixel_format = "MJPG";
+    }
     m->data.assign(png->begin(), png->end());
   } else {
     m->pixel_format = std::string(PixelFormatName(f.format));

@@ -67,6 +67,7 @@ record: {frame_encoding: png}
   EXPECT_EQ(c.robot.control_stamp, ControlStamp::kSender);
   EXPECT_EQ(c.record.frame_encoding, FrameEncoding::kPng);
   EXPECT_EQ(FrameEncodingName(c.record.frame_encoding), "png");
+  EXPECT_EQ(FrameEncodingName(FrameEncoding::kJpeg), "jpeg");
   EXPECT_EQ(PoseMethodName(c.pose.method), "lowe");
   EXPECT_EQ(ControlStampName(c.robot.control_stamp), "sender");
 }

@@ -101,6 +101,42 @@ TEST(Messages, PngFramesDecodeToTheSamePixels) {
   EXPECT_EQ(m.data, f.data);
 }
 
+// frame_encoding: jpeg records grey frames as JPEG (replayed as MJPG): smooth images come
+// back within a grey level or two, and decode through the MJPG path to the same size.
+TEST(Messages, JpegFramesReplayAsMjpgCloseToThePixels) {
+  Frame f;
+  f.width = 64;
+  f.height = 48;
+  f.stride = 64;
+  f.format = PixelFormat::kGrey;
+  f.data.resize(64 * 48);
+  for (int r = 0; r < 48; ++r) {
+    for (int c = 0; c < 64; ++c)
+      f.data[static_cast<size_t>(r * 64 + c)] = static_cast<uint8_t>(60 + 2 * c + r);
+  }
+  std::vector<uint8_t> buf;
+  kincal::frame_t m;
+  FillFrameMessage(f, FrameEncoding::kJpeg, &buf, &m);
+  EXPECT_EQ(m.pixel_format, "MJPG");
+  EXPECT_LT(m.size, 64 * 48);
+  Frame back;
+  back.width = 64;
+  back.height = 48;
+  back.stride = 64;
+  back.format = PixelFormat::kMjpeg;
+  back.data.assign(m.data.begin(), m.data.end());
+  cv::Mat grey;
+  ToGrey(back, &grey);
+  ASSERT_EQ(grey.cols, 64);
+  int worst = 0;
+  for (int r = 0; r < 48; ++r) {
+    for (int c = 0; c < 64; ++c)
+      worst = std::max(worst,
+                       std::abs(grey.at<uint8_t>(r, c) - f.data[static_cast<size_t>(r * 64 + c)]));
+  }
+  EXPECT_LE(worst, 3);
+}
+
 TEST(Messages, HealthCarriesEveryCounter) {
   DaemonCounters c;
   int64_t k = 1;

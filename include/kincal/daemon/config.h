@@ -21,7 +21,9 @@ enum class PoseMethod { kGroundPlane, kLowe };  // ground_plane | lowe
 // receive | sender | mapped (the sender's stamps mapped onto the receive clock, see
 // src/daemon/control_clock.h; the receive stamp for a message without sender_utime)
 enum class ControlStamp { kReceive, kSender, kMapped };
-enum class FrameEncoding { kRaw, kPng };  // raw | png
+// raw | png | jpeg (grey frames recorded as PNG, lossless, or JPEG, quality 95, which
+// replays as MJPG; frames the camera delivered in another format are recorded raw)
+enum class FrameEncoding { kRaw, kPng, kJpeg };
 std::string_view SourceName(SourceKind k);
 std::string_view PoseMethodName(PoseMethod m);
 std::string_view ControlStampName(ControlStamp s);
