@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <thread>
 
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
@@ -76,7 +77,11 @@ Command AddAnalyze(CLI::App& app) {
                  "pose noise 'pos_m,heading_rad' (default: estimated)");
   app.add_option("--max-effects", a->opt.max_effects, "at most this many effects")
       ->capture_default_str();
-  app.add_option("--threads", a->opt.num_threads, "solver threads")->capture_default_str();
+  a->opt.num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  app.add_option("--threads", a->opt.num_threads,
+                 "threads: candidate effects are fitted in parallel (default: every core; the "
+                 "result does not depend on it)")
+      ->capture_default_str();
   return [a]() -> int {
     AnalyzeOptions o = a->opt;
     if (!a->mrclam.empty()) {

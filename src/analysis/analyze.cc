@@ -5,10 +5,12 @@
 #include "kincal/analysis/analyze.h"
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 
 #include "analysis/baseline_fit.h"
 #include "analysis/evaluation.h"
+#include "analysis/parallel.h"
 #include "analysis/regressors.h"
 #include "analysis/selection.h"
 #include "analysis/windows.h"
@@ -92,6 +94,10 @@ bool AnalyzeOptions::IsValid(std::string* error) const {
     *error = "--threads must be >= 1";
     return false;
   }
+  if (screen_stride < 1 || confirm_candidates < 0) {
+    *error = "screen_stride >= 1 and confirm_candidates >= 0 expected";
+    return false;
+  }
   if (max_fit_windows < 10 || max_eval_windows < 10 || poses_per_window < 1) {
     *error = "max_fit_windows, max_eval_windows >= 10, poses_per_window >= 1 expected";
     return false;
@@ -123,6 +129,74 @@ Tried* Winner(std::vector<Tried>* tried, double min_gain) {
     if (winner == nullptr || t.trial.combined_gain > winner->trial.combined_gain) winner = &t;
   }
   return winner;
+}
+
+// One round: every candidate not yet accepted screened (in parallel), the best
+// confirm_candidates of them by screening cost confirmed (in parallel), the rest recorded
+// in *screened_out; *warm receives each candidate's own parameters. Results are in
+// candidate order whatever the thread count.
+std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidates,
+                            const std::vector<std::string>& accepted, const SelectionState& current,
+                            const Dataset& d, const std::shared_ptr<const KinematicModel>& model,
+                            double command_lag, const AnalyzeOptions& o,
+                            std::vector<EffectTrial>* screened_out,
+                            std::map<std::string, Eigen::VectorXd>* warm) {
+  const Eigen::Index old_np = current.fit.p.size();
+  std::vector<std::string> todo;
+  for (const auto& c : candidates) {
+    if (std::find(accepted.begin(), accepted.end(), c) == accepted.end()) todo.push_back(c);
+  }
+  // Parallel over candidates, each solve on one thread: the result does not depend on
+  // the thread count.
+  const int threads = std::max(1, o.num_threads);
+  std::vector<analysis::Screened> screened(todo.size());
+  std::vector<char> made(todo.size(), 0);
+  analysis::ParallelFor(todo.size(), threads, [&](size_t i) {
+    made[i] = analysis::ScreenEffect(todo[i], current, d, model, command_lag,
+                                     o.effects_mode == "list", 1, &screened[i]);
+  });
+  // Rank by screening cost (ties by candidate order); confirm the leading ones.
+  std::vector<size_t> order;
+  for (size_t i = 0; i < todo.size(); ++i) {
+    if (made[i]) order.push_back(i);
+  }
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    const auto& fa = screened[a].fit;
+    const auto& fb = screened[b].fit;
+    if (fa.ok != fb.ok) return fa.ok;
+    return fa.ok && fa.cost < fb.cost;
+  });
+  const size_t confirm = o.confirm_candidates == 0
+                             ? order.size()
+                             : std::min(order.size(), static_cast<size_t>(o.confirm_candidates));
+  std::vector<char> chosen(todo.size(), 0);
+  for (size_t r = 0; r < order.size(); ++r) {
+    if (r < confirm && screened[order[r]].ok) {
+      chosen[order[r]] = 1;
+    } else {
+      screened_out->push_back(analysis::ScreenedOut(
+          screened[order[r]], round, static_cast<int>(r) + 1, static_cast<int>(order.size())));
+    }
+  }
+  std::vector<size_t> confirm_idx;
+  for (size_t i = 0; i < todo.size(); ++i) {
+    if (chosen[i]) confirm_idx.push_back(i);
+  }
+  std::vector<Tried> tried(confirm_idx.size());
+  analysis::ParallelFor(confirm_idx.size(), threads, [&](size_t k) {
+    analysis::ConfirmEffect(screened[confirm_idx[k]], round, current, d, 1, &tried[k]);
+  });
+  // Each candidate's own parameters, for the next round's warm start.
+  for (const auto& sc : screened) {
+    if (sc.ok) (*warm)[sc.spec] = sc.fit.p.tail(sc.fit.p.size() - old_np);
+  }
+  std::vector<Tried> out;
+  for (auto& t : tried) {
+    if (!t.fit.ok) continue;
+    (*warm)[t.trial.name] = t.fit.p.tail(t.fit.p.size() - old_np);
+    out.push_back(std::move(t));
+  }
+  return out;
 }
 
 }  // namespace
@@ -185,21 +259,16 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   current.diagnosis = res.diagnosis_before;
   current.effects = base_effects;
 
-  // 2. Selection: each round tries every candidate on top of what was accepted.
+  // 2. Selection: each round screens every candidate on top of what was accepted, then
+  // confirms the leading ones on all windows.
   std::vector<std::string> accepted = o.base_effects;
   const auto candidates = analysis::Candidates(*model, o);
   for (int round = 1; round <= o.max_effects && !candidates.empty(); ++round) {
-    std::vector<Tried> tried;
-    for (size_t c = 0; c < candidates.size(); ++c) {
-      const std::string& spec = candidates[c];
-      progress(SelectionProgress(round, c, candidates.size(), o.max_effects),
-               "round " + std::to_string(round) + ": " + spec);
-      if (std::find(accepted.begin(), accepted.end(), spec) != accepted.end()) continue;
-      Tried t;
-      if (analysis::TryEffect(spec, round, current, d, model, command_lag, o, &t)) {
-        tried.push_back(std::move(t));
-      }
-    }
+    progress(SelectionProgress(round, 0, 1, o.max_effects), "round " + std::to_string(round));
+    std::map<std::string, Eigen::VectorXd> warm;
+    std::vector<Tried> tried = RunRound(round, candidates, accepted, current, d, model, command_lag,
+                                        o, &res.trials, &warm);
+    for (auto& [spec, p] : warm) current.warm[spec] = std::move(p);
     Tried* winner = Winner(&tried, o.min_gain);
     for (auto& t : tried) {
       if (&t == winner) t.trial.accepted = true;

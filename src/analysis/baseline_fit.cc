@@ -6,6 +6,8 @@
 #include <random>
 #include <sstream>
 
+#include "analysis/parallel.h"
+
 namespace kincal::analysis {
 
 Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
@@ -126,12 +128,14 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     }
     starts.push_back(s);
   }
+  // The starts in parallel, each solve on one thread: the result does not depend on the
+  // thread count.
+  if (o.progress) o.progress(0.05, "baseline: multi-start");
+  std::vector<Fit> fits(starts.size());
+  ParallelFor(starts.size(), o.num_threads,
+              [&](size_t k) { fits[k] = RunFit(sys, u, d.short_meas, starts[k], false, 1, 40); });
   std::vector<Fit> stage1;
-  for (size_t k = 0; k < starts.size(); ++k) {
-    if (o.progress)
-      o.progress(0.05 + 0.2 * static_cast<double>(k) / static_cast<double>(starts.size()),
-                 "baseline: multi-start");
-    Fit f = RunFit(sys, u, d.short_meas, starts[k], false, o.num_threads, 40);
+  for (auto& f : fits) {
     if (f.ok) stage1.push_back(std::move(f));
   }
   if (stage1.empty())
@@ -140,17 +144,23 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
         "column order)");
   std::sort(stage1.begin(), stage1.end(),
             [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
-  // Refine the best few distinct optima on the full windows.
-  std::vector<Fit> refined;
-  for (size_t k = 0; k < stage1.size() && refined.size() < 3; ++k) {
+  // Refine the best few distinct optima on the full windows (in parallel).
+  std::vector<const Fit*> seeds;
+  for (size_t k = 0; k < stage1.size() && seeds.size() < 3; ++k) {
     bool distinct = true;
-    for (const auto& r : refined) {
-      if (((stage1[k].p - r.p).array().abs() <= 1e-3 * (r.p.array().abs() + 1e-6)).all())
+    for (const Fit* r : seeds) {
+      if (((stage1[k].p - r->p).array().abs() <= 1e-3 * (r->p.array().abs() + 1e-6)).all())
         distinct = false;
     }
     if (!distinct && k > 0) continue;
     if (stage1[k].cost > 1.5 * stage1[0].cost + 10.0) break;
-    Fit f = RunFit(sys, u, d.fit_meas, stage1[k].p, true, o.num_threads);
+    seeds.push_back(&stage1[k]);
+  }
+  std::vector<Fit> tops(seeds.size());
+  ParallelFor(seeds.size(), o.num_threads,
+              [&](size_t k) { tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, true, 1); });
+  std::vector<Fit> refined;
+  for (auto& f : tops) {
     if (f.ok) refined.push_back(std::move(f));
   }
   if (refined.empty()) throw AnalysisError("baseline refinement failed");

@@ -14,24 +14,28 @@ constexpr double kStartSpreadSigmas = 2.0;
 // The best start is refined with the covariance, for at most this many iterations.
 constexpr int kRefineIterations = 20;
 
-// Starting points for one candidate's fit.
+// Starting points for one candidate's fit; `warm` holds its own parameters from the last
+// round (empty the first time: then the spread starts explore around the default).
 std::vector<Eigen::VectorXd> Starts(const System& sys, const Effect& eff, const Eigen::VectorXd& p,
-                                    double command_lag) {
+                                    double command_lag, const Eigen::VectorXd* warm) {
   const int old_np = static_cast<int>(p.size());
   const int np = sys.num_params();
   Eigen::VectorXd s0(np);
   s0.head(old_np) = p;
   for (int i = old_np; i < np; ++i) s0[i] = sys.params()[static_cast<size_t>(i)].default_value;
   std::vector<Eigen::VectorXd> starts = {s0};
+  if (warm != nullptr && warm->size() == np - old_np) {
+    starts.front().tail(np - old_np) = *warm;  // the last round explored the defaults
+  }
   const bool timing = eff.stage() == EffectStage::kControlTiming;
-  if (np - old_np == 1 &&
+  if (np - old_np == 1 && warm == nullptr &&
       (timing || (eff.time_varying() && std::abs(command_lag) > kMinLagForStartS))) {
     // Timing: start at the lag the cross-correlation found (a delay or a lag's tau).
     Eigen::VectorXd s = s0;
     s[np - 1] = timing ? command_lag : std::abs(command_lag);
     starts.push_back(s);
   }
-  if (np - old_np == 1) {
+  if (np - old_np == 1 && warm == nullptr) {
     for (double k : {-kStartSpreadSigmas, kStartSpreadSigmas}) {
       Eigen::VectorXd s = s0;
       s[np - 1] += k * sys.params()[static_cast<size_t>(np - 1)].default_sigma;
@@ -76,16 +80,16 @@ FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
   return r;
 }
 
-bool TryEffect(const std::string& spec, int round, const SelectionState& current, const Dataset& d,
-               const std::shared_ptr<const KinematicModel>& model, double command_lag,
-               const AnalyzeOptions& o, Tried* out) {
+bool ScreenEffect(const std::string& spec, const SelectionState& current, const Dataset& d,
+                  const std::shared_ptr<const KinematicModel>& model, double command_lag,
+                  bool user_list, int threads, Screened* out) {
   EffectSpec parsed;
   std::unique_ptr<Effect> made;
   Status status = ParseEffectSpec(spec, &parsed);
   if (status.ok()) status = MakeEffect(parsed, *model, &made);
   if (!status.ok()) {
-    if (o.effects_mode == "list") throw AnalysisError("--effects: " + status.message());
-    return false;  // a candidate that does not apply to this model
+    if (!user_list) return false;  // a candidate that does not apply
+    throw AnalysisError("--effects: " + status.message());
   }
   const std::shared_ptr<const Effect> eff = std::move(made);
   std::vector<std::shared_ptr<const Effect>> effects = current.effects;
@@ -93,25 +97,35 @@ bool TryEffect(const std::string& spec, int round, const SelectionState& current
   if (!System::CheckCombination(*model, effects, {}).ok()) {
     return false;  // conflicts with an accepted effect (same parameters)
   }
-  const auto sys = std::make_unique<System>(model, effects);
-  Tried& t = *out;
-  t.trial.name = spec;
-  t.trial.round = round;
-  t.trial.signature_z = SignatureZ(eff->signature(), current.diagnosis);
-  t.effects = effects;
-  const auto& controls = d.rec->controls;
-  Fit best;
-  for (const auto& s : Starts(*sys, *eff, current.fit.p, command_lag)) {
-    Fit f = RunFit(*sys, controls, d.fit_meas, s, false, o.num_threads);
-    if (f.ok && (!best.ok || f.cost < best.cost)) best = std::move(f);
+  const System sys(model, effects);
+  out->spec = spec;
+  out->model = model;
+  out->effects = effects;
+  const auto warm = current.warm.find(spec);
+  const Eigen::VectorXd* w = warm == current.warm.end() ? nullptr : &warm->second;
+  for (const auto& s : Starts(sys, *eff, current.fit.p, command_lag, w)) {
+    Fit f = RunFit(sys, d.rec->controls, d.screen_meas, s, false, threads);
+    if (f.ok && (!out->fit.ok || f.cost < out->fit.cost)) out->fit = std::move(f);
   }
-  if (!best.ok) return false;
-  best = RunFit(*sys, controls, d.fit_meas, best.p, true, o.num_threads, kRefineIterations);
-  if (!best.ok) return false;
+  out->ok = out->fit.ok;
+  return true;
+}
+
+void ConfirmEffect(const Screened& s, int round, const SelectionState& current, const Dataset& d,
+                   int threads, Tried* out) {
+  const System sys(s.model, s.effects);
+  Tried& t = *out;
+  t.trial.name = s.spec;
+  t.trial.round = round;
+  t.trial.signature_z = SignatureZ(s.effects.back()->signature(), current.diagnosis);
+  t.effects = s.effects;
+  const Fit best =
+      RunFit(sys, d.rec->controls, d.fit_meas, s.fit.p, true, threads, kRefineIterations);
+  if (!best.ok) return;
   t.fit = best;
-  t.eval = Evaluate(*sys, best.p, d);
+  t.eval = Evaluate(sys, best.p, d);
   const int old_np = static_cast<int>(current.fit.p.size());
-  const int np = sys->num_params();
+  const int np = sys.num_params();
   const int k = np - old_np;
   // Quasi-BIC: residuals within a window are correlated, so the sample size is the
   // effective number of independent residuals (AR(1) design effect of the larger model,
@@ -124,8 +138,8 @@ bool TryEffect(const std::string& spec, int round, const SelectionState& current
   t.trial.heldout_gain = 1.0 - t.eval.held.pos_rms_m / std::max(held.pos_rms_m, 1e-300);
   t.trial.combined_gain =
       1.0 - Combined(t.eval.held, d.sigma) / std::max(Combined(held, d.sigma), 1e-300);
-  t.trial.params = Estimates(*sys, best, old_np, np);
-  const bool observable = Unobservable(*sys, best).empty();
+  t.trial.params = Estimates(sys, best, old_np, np);
+  const bool observable = Unobservable(sys, best).empty();
   std::ostringstream ev;
   ev.precision(3);
   ev << "signature z=" << t.trial.signature_z << "; fit cost " << (best.cost / cost - 1.0) * 100.0
@@ -135,7 +149,17 @@ bool TryEffect(const std::string& spec, int round, const SelectionState& current
   if (!observable) ev << "; not identifiable together with the model's parameters";
   t.trial.evidence = ev.str();
   t.ok = observable;
-  return true;
+}
+
+EffectTrial ScreenedOut(const Screened& s, int round, int rank, int ranked) {
+  EffectTrial t;
+  t.name = s.spec;
+  t.round = round;
+  std::ostringstream ev;
+  ev << "screened out: its fit on the screening windows ranked " << rank << " of " << ranked
+     << (s.ok ? "" : " (no start converged)") << "; not confirmed";
+  t.evidence = ev.str();
+  return t;
 }
 
 }  // namespace kincal::analysis

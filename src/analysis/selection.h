@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -22,12 +23,14 @@ std::vector<std::string> Candidates(const KinematicModel& m, const AnalyzeOption
 FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
                      const std::vector<std::string>& effects, int fit_windows);
 
-// Where the selection stands: the effects accepted so far and their fit.
+// Where the selection stands: the effects accepted so far and their fit, and each
+// candidate's own parameters as the last round estimated them (warm starts).
 struct SelectionState {
   std::vector<std::shared_ptr<const Effect>> effects;
   Fit fit;
   Evaluation eval;
   std::vector<DiagnosisTerm> diagnosis;
+  std::map<std::string, Eigen::VectorXd> warm;
 };
 
 // One candidate tried on top of the current state.
@@ -39,12 +42,33 @@ struct Tried {
   bool ok = false;  // fitted, and every parameter identifiable
 };
 
-// Fits `spec` on top of `current` from several starts (the current parameters with the
-// effect's defaults, the command lag for timing effects, +-2 sigma for a single new
-// parameter) and scores it. False when the effect cannot be made or fitted (with a user's
-// effect list, a bad spec throws AnalysisError instead).
-bool TryEffect(const std::string& spec, int round, const SelectionState& current, const Dataset& d,
-               const std::shared_ptr<const KinematicModel>& model, double command_lag,
-               const AnalyzeOptions& o, Tried* out);
+// A candidate screened: fitted on the screening windows (every few fit windows) from
+// several starts.
+struct Screened {
+  std::string spec;
+  std::shared_ptr<const KinematicModel> model;
+  std::vector<std::shared_ptr<const Effect>> effects;
+  Fit fit;  // on d.screen_meas, no covariance
+  bool ok = false;
+};
+
+// Fits `spec` on top of `current` on the screening windows from several starts (the
+// current parameters with the effect's defaults, or with its parameters of the last round
+// when it was tried before; the command lag for timing effects; +-2 sigma for a single new
+// parameter tried for the first time). False when the effect cannot be made or combined
+// (from a user's effect list, `user_list`, a bad spec throws AnalysisError instead).
+// `threads`: Ceres's.
+bool ScreenEffect(const std::string& spec, const SelectionState& current, const Dataset& d,
+                  const std::shared_ptr<const KinematicModel>& model, double command_lag,
+                  bool user_list, int threads, Screened* out);
+
+// Confirms a screened candidate on every fit window (refined from its screening optimum,
+// with covariance), evaluates it on the held-out windows and scores it (quasi-BIC,
+// held-out gain, identifiability).
+void ConfirmEffect(const Screened& s, int round, const SelectionState& current, const Dataset& d,
+                   int threads, Tried* out);
+
+// The record of a candidate that screening left out: not confirmed, never accepted.
+EffectTrial ScreenedOut(const Screened& s, int round, int rank, int ranked);
 
 }  // namespace kincal::analysis

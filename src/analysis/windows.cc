@@ -21,6 +21,8 @@ constexpr double kShortWindowFraction = 0.25;
 constexpr double kShortWindowIntervals = 2.0;
 constexpr double kMinShortWindowS = 0.2;
 constexpr int kMaxShortWindows = 150;
+// Screening subsamples the fit windows only when each screening set keeps this many.
+constexpr int kMinScreenWindows = 12;
 // The fewest poses a recording must have.
 constexpr size_t kMinPoses = 20;
 // No window spans a gap between consecutive poses longer than this many typical pose
@@ -190,6 +192,14 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
                         "--fit-fraction or --horizon");
   d.fit_meas = WindowMeasurements(d, d.fit_windows, o.poses_per_window);
   d.short_meas = WindowMeasurements(d, d.short_windows, std::max(2, o.poses_per_window / 2));
+  d.screen_meas = d.fit_meas;
+  if (o.screen_stride > 1 &&
+      d.fit_windows.size() >= static_cast<size_t>(kMinScreenWindows * o.screen_stride)) {
+    std::vector<Window> every;
+    for (size_t k = 0; k < d.fit_windows.size(); k += static_cast<size_t>(o.screen_stride))
+      every.push_back(d.fit_windows[k]);
+    d.screen_meas = WindowMeasurements(d, every, o.poses_per_window);
+  }
   return d;
 }
 

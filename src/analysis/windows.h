@@ -32,6 +32,9 @@ struct Dataset {
   std::vector<Window> fit_windows;    // non-overlapping, in the fit span
   std::vector<Window> short_windows;  // shorter, for the multi-start stage
   std::vector<PoseMeasurement> fit_meas, short_meas;
+  // Every screen_stride-th fit window: candidates are screened on these, then the leading
+  // ones confirmed on all (the fit windows themselves when there are too few).
+  std::vector<PoseMeasurement> screen_meas;
   std::vector<RegressorValues> features;  // per eval window (regressors.h)
 };
 

@@ -154,6 +154,36 @@ INSTANTIATE_TEST_SUITE_P(
         Case{3, {{"turn_slowdown", {{"c_slow", 0.5}}}, {"time_offset", {{"delay_s", 0.15}}}}}),
     CaseName);
 
+// Issue 19: screening candidates on a quarter of the windows and confirming the leading
+// ones, with warm starts, selects what trying every candidate on every window did, with
+// every parameter within 0.5 sigma of it; and the result does not depend on the number
+// of threads (bit-identical).
+TEST(Speed, ScreeningAndThreadsChangeNothing) {
+  const Case c{1, {{"time_offset", {{"delay_s", 0.2}}}, {"turn_slowdown", {{"c_slow", 0.5}}}}, 3};
+  const Recording rec = SimulateRecording(c, 100.0);
+  AnalyzeOptions full = FastOptions("unicycle");
+  full.screen_stride = 1;
+  full.confirm_candidates = 0;
+  const AnalyzeResult ref = Analyze(rec, full);
+  const AnalyzeResult one = Analyze(rec, FastOptions("unicycle"));
+  AnalyzeOptions two_threads = FastOptions("unicycle");
+  two_threads.num_threads = 2;
+  const AnalyzeResult two = Analyze(rec, two_threads);
+  ASSERT_EQ(one.after.effects, ref.after.effects);
+  ASSERT_EQ(two.after.effects, one.after.effects);
+  ASSERT_EQ(one.after.params.size(), ref.after.params.size());
+  for (size_t i = 0; i < ref.after.params.size(); ++i) {
+    const auto& a = one.after.params[i];
+    const auto& b = ref.after.params[i];
+    EXPECT_LE(std::abs(a.value - b.value), 0.5 * b.sigma) << a.name;
+    EXPECT_EQ(two.after.params[i].value, a.value) << a.name;
+    EXPECT_EQ(two.after.params[i].sigma, a.sigma) << a.name;
+  }
+  int screened_out = 0;
+  for (const auto& t : one.trials) screened_out += t.evidence.rfind("screened out", 0) == 0;
+  EXPECT_GT(screened_out, 0);
+}
+
 TEST(Clean, NoEffectIsInventedOnCleanData) {
   // 20 seeds of clean data: an effect may be wrongly accepted in at most 1 of 20.
   int false_accepts = 0;

@@ -1,6 +1,7 @@
 // Selection: the candidates are the registered effects that apply (per channel where an
-// effect acts on one), and one candidate tried on a recording with a hidden delay is
-// accepted with its value and a held-out gain, while a wrong one gains nothing.
+// effect acts on one), and one candidate screened and confirmed on a recording with a
+// hidden delay is accepted with its value and a held-out gain, while a wrong one gains
+// nothing.
 #include "analysis/selection.h"
 
 #include <gtest/gtest.h>
@@ -30,6 +31,15 @@ TEST(Selection, CandidatesAreTheEffectsThatApply) {
   EXPECT_EQ(Candidates(*MakeModel("unicycle"), o), std::vector<std::string>{"lever_arm"});
 }
 
+// A candidate screened on the screening windows, then confirmed on all of them.
+bool Try(const std::string& spec, const SelectionState& current, const Dataset& d,
+         const std::shared_ptr<const KinematicModel>& model, double lag, Tried* out) {
+  Screened s;
+  if (!ScreenEffect(spec, current, d, model, lag, false, 1, &s) || !s.ok) return false;
+  ConfirmEffect(s, 1, current, d, 1, out);
+  return out->fit.ok;
+}
+
 TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
   const Recording rec = testing::UnicycleRecording(90.0, {"time_offset"}, {{"delay_s", 0.25}}, 12);
   AnalyzeOptions o;
@@ -45,14 +55,22 @@ TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
   current.eval = Evaluate(bare, current.fit.p, d);
   const double lag = EstimateCommandLag(d, bare, current.fit.p);
   Tried delay, wrong;
-  ASSERT_TRUE(TryEffect("time_offset", 1, current, d, model, lag, o, &delay));
+  ASSERT_LT(d.screen_meas.size(), d.fit_meas.size());  // screened on a subsample
+  ASSERT_TRUE(Try("time_offset", current, d, model, lag, &delay));
   ASSERT_TRUE(delay.ok);
   ASSERT_EQ(delay.trial.params.size(), 1u);
   EXPECT_NEAR(delay.trial.params[0].value, 0.25, std::max(0.01, 3 * delay.trial.params[0].sigma));
   EXPECT_GT(delay.trial.heldout_gain, 0.5);
   EXPECT_LT(delay.trial.delta_bic, 0.0);
-  ASSERT_TRUE(TryEffect("yaw_rate_bias", 1, current, d, model, lag, o, &wrong));
+  ASSERT_TRUE(Try("yaw_rate_bias", current, d, model, lag, &wrong));
   EXPECT_LT(wrong.trial.heldout_gain, 0.1);
+  // A second round starts from the first round's estimate (warm start) and lands on the
+  // same optimum.
+  current.warm["time_offset"] = delay.fit.p.tail(1);
+  Tried again;
+  ASSERT_TRUE(Try("time_offset", current, d, model, lag, &again));
+  EXPECT_NEAR(again.trial.params[0].value, delay.trial.params[0].value,
+              0.1 * delay.trial.params[0].sigma);
 }
 
 }  // namespace

@@ -53,8 +53,13 @@ struct AnalyzeOptions {
   int poses_per_window = 8;     // measurements used inside each fit window
   double min_gain = 0.02;       // held-out improvement needed to accept an effect
   int max_effects = 4;
+  // Each round screens every candidate on every screen_stride-th fit window (1: all of
+  // them), then confirms the confirm_candidates best screened on all windows (0: every
+  // candidate); only confirmed candidates can be accepted.
+  int screen_stride = 4;
+  int confirm_candidates = 4;
   uint64_t seed = 1;
-  int num_threads = 1;
+  int num_threads = 1;  // candidates fitted in parallel on this many threads
   std::function<void(double fraction, const std::string& stage)> progress;
   bool IsValid(std::string* error) const;
 };
