@@ -2,12 +2,19 @@
 //  - the thesis experiment (ch. 6) in simulation: NNDE of SR-DD2, EKF, UKF and the batch
 //    fit against the Bayesian Cramer-Rao bound, RMS over Monte-Carlo trials;
 //  - Analyze() time against recording length (a differential-drive robot with a hidden
-//    time offset, 20 Hz poses), with the window caps lifted so that every window counts.
+//    time offset, 20 Hz poses), with the window caps lifted so that every window counts;
+//  - what users run: `kincal analyze` with its default options (automatic effect
+//    selection, every core) on the five MR.CLAM robots of dataset 6 (read from ../shared
+//    beside the source tree) and on simulated unicycle recordings of 1, 10 and 60 minutes
+//    at 100 Hz with a hidden delay and speed loss in turns (the MR.CLAM pattern). Wall time.
 #include <benchmark/benchmark.h>
 
+#include <filesystem>
 #include <random>
+#include <thread>
 
 #include "kincal/analysis/analyze.h"
+#include "kincal/io/recording.h"
 #include "kincal/model.h"
 #include "kincal/simulator.h"
 #include "kincal/thesis.h"
@@ -80,6 +87,78 @@ BENCHMARK(BM_AnalyzeVsLength)
     ->Arg(240)
     ->Unit(benchmark::kSecond)
     ->Iterations(1);
+
+// The options `kincal analyze` runs with by default.
+AnalyzeOptions UserDefaults(const std::string& model) {
+  AnalyzeOptions o;
+  o.model = model;
+  o.num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return o;
+}
+
+void Report(benchmark::State& state, const AnalyzeResult& r) {
+  std::string effects;
+  for (const auto& e : r.after.effects) effects += (effects.empty() ? "" : "+") + e;
+  state.SetLabel(effects.empty() ? "none" : effects);
+  state.counters["effects"] = static_cast<double>(r.after.effects.size());
+  state.counters["heldout_mm_before"] = 1e3 * r.before.heldout.pos_rms_m;
+  state.counters["heldout_mm_after"] = 1e3 * r.after.heldout.pos_rms_m;
+  state.counters["gain"] = 1.0 - r.after.heldout.pos_rms_m / r.before.heldout.pos_rms_m;
+}
+
+void BM_AnalyzeMrclam(benchmark::State& state) {
+  const std::string dir = std::string(KINCAL_SOURCE_DIR) + "/../shared/data/mrclam/dataset6";
+  if (!std::filesystem::is_directory(dir)) {
+    state.SkipWithError(("no MR.CLAM data at " + dir).c_str());
+    return;
+  }
+  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0)));
+  AnalyzeResult r;
+  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle"));
+  Report(state, r);
+  state.counters["poses"] = static_cast<double>(rec.poses.size());
+}
+BENCHMARK(BM_AnalyzeMrclam)
+    ->DenseRange(1, 5)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime();
+
+Recording UnicycleRecording(double duration_s) {
+  const System truth = MakeSystem("unicycle", {"time_offset", "turn_slowdown"});
+  VecN<kMaxState> p(truth.num_params());
+  p << 0.95, 0.9, 0.2, 0.5;
+  std::mt19937_64 rng(7);
+  Recording rec;
+  rec.source = "simulated unicycle";
+  rec.controls = ControlSignal(truth.num_controls(), 0);
+  const TimeNs t1 = SecondsToNs(duration_s);
+  const std::vector<double> lo = {-0.3, -1.5}, hi = {1.0, 1.5};
+  AppendPiecewiseRandom(&rec.controls, 0, t1, lo, hi, 0.7, 2.5, rng);
+  const auto times = FrameTimes(0, t1, FrameTimingOptions{100.0, 0.0, 0.0, 0.0}, rng);
+  const StateVec x0 = truth.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
+  const auto traj = SimulateTruth(truth, x0, rec.controls, times);
+  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
+  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
+  return rec;
+}
+
+void BM_AnalyzeDefaultsVsLength(benchmark::State& state) {
+  const double seconds = static_cast<double>(state.range(0));
+  const Recording rec = UnicycleRecording(seconds);
+  AnalyzeResult r;
+  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle"));
+  Report(state, r);
+  state.counters["recording_s"] = seconds;
+  state.counters["poses"] = static_cast<double>(rec.poses.size());
+}
+BENCHMARK(BM_AnalyzeDefaultsVsLength)
+    ->Arg(60)
+    ->Arg(600)
+    ->Arg(3600)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace kincal

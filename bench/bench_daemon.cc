@@ -13,7 +13,9 @@
 #include <thread>
 #include <vector>
 
+#include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
+#include "kincal/vision/camera.h"
 
 namespace kincal::daemon {
 namespace {
@@ -70,6 +72,93 @@ void BM_DaemonReplayFast(benchmark::State& state) {
   state.counters["peak_rss_mb"] = PeakRssMb();
 }
 BENCHMARK(BM_DaemonReplayFast)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+// A 10 s recording of the simulated robot at width x height with frames stored as
+// `encoding` (raw GREY, PNG, or JPEG replayed as MJPG), made once per case.
+std::string FormatLog(int width, int height, FrameEncoding encoding) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string stem = "kincal_bench_" + std::to_string(::getpid()) + "_" +
+                           std::to_string(width) + "_" + std::string(FrameEncodingName(encoding));
+  DaemonConfig c = Base();
+  if (width != 640 || height != 480) {
+    vision::CameraModel cam;
+    cam.width = width;
+    cam.height = height;
+    cam.fx = cam.fy = 500.0 * width / 640.0;
+    cam.cx = 0.5 * (width - 1);
+    cam.cy = 0.5 * (height - 1);
+    c.camera.intrinsics = (dir / (stem + ".yaml")).string();
+    if (!vision::WriteCameraYaml(cam, c.camera.intrinsics).ok()) return "";
+  }
+  c.sim.speed = 0;
+  c.sim.duration_s = 10;
+  c.record.path = (dir / (stem + ".lcm")).string();
+  c.record.frame_encoding = encoding;
+  Daemon d(c);
+  d.Run();
+  return c.record.path;
+}
+
+// Replay throughput (--fast) by frame format and size: decoding is the difference.
+void BM_DaemonReplayFormat(benchmark::State& state) {
+  const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
+  const auto encoding = static_cast<FrameEncoding>(state.range(2));
+  const std::string log = FormatLog(width, height, encoding);
+  if (log.empty()) {
+    state.SkipWithError("could not write the camera file");
+    return;
+  }
+  DaemonConfig c = Base();
+  c.camera.intrinsics =
+      width != 640 || height != 480 ? log.substr(0, log.size() - 4) + ".yaml" : std::string();
+  c.source = SourceKind::kReplay;
+  c.replay.path = log;
+  c.replay.speed = 0;
+  int64_t frames = 0;
+  double seconds = 0;
+  for (auto _ : state) {
+    Daemon d(c);
+    const auto t0 = std::chrono::steady_clock::now();
+    d.Run();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    frames += d.counters().frames_captured;
+  }
+  state.counters["frames_per_s"] = static_cast<double>(frames) / seconds;
+  state.counters["log_mb"] = static_cast<double>(std::filesystem::file_size(log)) / 1e6;
+  state.SetLabel(std::string(FrameEncodingName(encoding)));
+  std::filesystem::remove(log);
+}
+BENCHMARK(BM_DaemonReplayFormat)
+    ->Args({640, 480, static_cast<int>(FrameEncoding::kRaw)})
+    ->Args({640, 480, static_cast<int>(FrameEncoding::kPng)})
+    ->Args({640, 480, static_cast<int>(FrameEncoding::kJpeg)})
+    ->Args({1280, 720, static_cast<int>(FrameEncoding::kRaw)})
+    ->Args({1280, 720, static_cast<int>(FrameEncoding::kPng)})
+    ->Args({1280, 720, static_cast<int>(FrameEncoding::kJpeg)})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(3);
+
+// The frame-to-publish latency while the effect search runs in the background: the
+// simulated robot with a hidden lag (config/kincald_sim_lag.yaml, robot.effects: auto) at
+// --speed 1 for 100 s, during which the search runs and adds the lag.
+void BM_DaemonLatencyDuringEffectSearch(benchmark::State& state) {
+  DaemonCounters c{};
+  for (auto _ : state) {
+    DaemonConfig cfg =
+        LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim_lag.yaml");
+    cfg.lcm.url = "memq://";
+    cfg.sim.duration_s = 100;
+    Daemon d(cfg);
+    d.Run();
+    c = d.counters();
+  }
+  state.counters["latency_p50_ms"] = c.latency_p50_ms;
+  state.counters["latency_p99_ms"] = c.latency_p99_ms;
+  state.counters["latency_max_ms"] = c.latency_max_ms;
+  state.counters["effects_added"] = static_cast<double>(c.effects_added);
+  state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
+}
+BENCHMARK(BM_DaemonLatencyDuringEffectSearch)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 void BM_DaemonLatencySpeed1(benchmark::State& state) {
   const std::string& log = Log();

@@ -57,14 +57,10 @@ void BM_Propagate(benchmark::State& state, std::string model) {
   }
 }
 
-void BM_DiffDriveStepVsStateSize(benchmark::State& state) {
-  // Cost growth with the augmented state: diffdrive plus effects adding parameters.
-  static const std::vector<std::vector<std::string>> kEffects = {
-      {},
-      {"time_offset"},
-      {"time_offset", "lever_arm"},
-      {"time_offset", "lever_arm", "lateral_slip", "yaw_rate_bias"}};
-  const System sys = MakeSystem("diffdrive", kEffects[static_cast<size_t>(state.range(0))]);
+// The SR-DD2 step of `model` with `effects` over one 30 Hz frame interval.
+void AugmentedStep(benchmark::State& state, const std::string& model,
+                   const std::vector<std::string>& effects) {
+  const System sys = MakeSystem(model, effects);
   ControlSignal controls(2, 0);
   std::mt19937_64 rng(1);
   const std::vector<double> lo = {-1, -1}, hi = {1, 1};
@@ -83,7 +79,28 @@ void BM_DiffDriveStepVsStateSize(benchmark::State& state) {
   }
   state.counters["state_dim"] = n;
 }
+
+void BM_DiffDriveStepVsStateSize(benchmark::State& state) {
+  // Cost growth with the augmented state: diffdrive plus effects adding parameters.
+  static const std::vector<std::vector<std::string>> kEffects = {
+      {},
+      {"time_offset"},
+      {"time_offset", "lever_arm"},
+      {"time_offset", "lever_arm", "lateral_slip", "yaw_rate_bias"}};
+  AugmentedStep(state, "diffdrive", kEffects[static_cast<size_t>(state.range(0))]);
+}
 BENCHMARK(BM_DiffDriveStepVsStateSize)->DenseRange(0, 3);
+
+// What kincald steps with effects: auto once the search has added what it found: the
+// MR.CLAM pattern (unicycle + delay + speed lost in turns) and the demo's diffdrive + lag.
+void BM_AutoEffectsStep(benchmark::State& state) {
+  if (state.range(0) == 0) {
+    AugmentedStep(state, "unicycle", {"time_offset", "turn_slowdown"});
+  } else {
+    AugmentedStep(state, "diffdrive", {"actuator_lag"});
+  }
+}
+BENCHMARK(BM_AutoEffectsStep)->Arg(0)->Arg(1);
 
 const bool kRegistered = [] {
   for (const auto& model : ModelRegistry::Instance().Names()) {
