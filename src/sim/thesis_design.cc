@@ -29,10 +29,12 @@ std::vector<std::array<double, 2>> DrawGains(const WheelRateErrors& w, std::mt19
   return gains;
 }
 
-void StampOnTick(const ThesisOptions& o, TimeNs t0, std::vector<PoseMeasurement>* meas) {
+// Stamps on a timer of the recording's clock (floor to its tick): the tick's phase is
+// the clock's, not the run's, so every frame's stamp error is uniform within a tick.
+void StampOnTick(const ThesisOptions& o, std::vector<PoseMeasurement>* meas) {
   if (o.stamp_step_s <= 0.0) return;
   const TimeNs step = SecondsToNs(o.stamp_step_s);
-  for (auto& m : *meas) m.t_ns = t0 + (m.t_ns - t0) / step * step;
+  for (auto& m : *meas) m.t_ns = m.t_ns / step * step;
 }
 
 std::array<double, 2> Realised(const ThesisOptions& o, const ThesisDesign& d, int k) {
@@ -72,7 +74,7 @@ ThesisDesign IdealDesign(const System& truth, const Eigen::Vector3d& params, con
     const StateVec x0 = truth.MakeState(sx, sy, sth, p, d.realised, d.realised.ToSeconds(run.t0));
     const auto traj = SimulateTruth(truth, x0, d.realised, times);
     run.meas = MeasurePoses(traj, R, run.index, rng);
-    StampOnTick(o, run.t0, &run.meas);
+    StampOnTick(o, &run.meas);
     d.all.insert(d.all.end(), run.meas.begin(), run.meas.end());
     d.starts.push_back(run.start_pose);
   }
@@ -157,7 +159,7 @@ void MeasureRun(const System& truth, const Eigen::Vector3d& params, const Thesis
     }
     run->meas.push_back(m);
   }
-  StampOnTick(o, run->t0, &run->meas);
+  StampOnTick(o, &run->meas);
   if (o.stamp_step_s > 0.0) {
     // The estimators know the tick: the true time lies within [stamp, stamp + tick), so
     // they take its middle and the uniform spread's variance.
@@ -197,7 +199,7 @@ ThesisDesign RealisticDesign(const System& truth, const Eigen::Vector3d& params,
       const StateVec x0 =
           truth.MakeState(s.x(), s.y(), s.z(), p, d.realised, d.realised.ToSeconds(run.t0));
       run.meas = MeasurePoses(SimulateTruth(truth, x0, d.realised, times), R, k, rng);
-      StampOnTick(o, run.t0, &run.meas);
+      StampOnTick(o, &run.meas);
     }
     d.all.insert(d.all.end(), run.meas.begin(), run.meas.end());
     d.starts.push_back(run.start_pose);
