@@ -245,7 +245,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
     for (const auto& f : o.filters) {
       int gated = 0;
       joint.Record(f, RunFilter(sys, f, d, d.runs, guess, prior_cov, gate, &gated), &res);
-      res.poses_gated[f] += gated;
+      if (gate > 0.0) res.poses_gated[f] += gated;
       if (o.per_run) PerRunCalibrations(sys, f, d, truth, guess, prior_cov, gate, &per_run, &res);
     }
     BatchOptions bopt;
@@ -258,7 +258,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
       for (const auto& f : o.filters) {
         int gated = 0;
         joint.Record(f + "+gains", RunFilter(*gm.sys, f, d, d.runs, g0, c0, gate, &gated), &res);
-        res.poses_gated[f + "+gains"] += gated;
+        if (gate > 0.0) res.poses_gated[f + "+gains"] += gated;
       }
       BatchOptions gopt = bopt;
       gopt.prior = ParamPrior{g0, c0};
