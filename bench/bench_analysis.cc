@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
+#include <map>
 #include <random>
 #include <thread>
 
@@ -40,27 +41,34 @@ void BM_ThesisAccuracy(benchmark::State& state) {
 }
 BENCHMARK(BM_ThesisAccuracy)->Unit(benchmark::kSecond)->Iterations(1);
 
-Recording DiffDriveRecording(double duration_s) {
-  const System truth = MakeSystem("diffdrive", {"time_offset"});
-  VecN<kMaxState> p(truth.num_params());
+// `duration_s` of piecewise-constant random commands in [lo, hi] driving `model` with
+// `effects` at `truth` (by name), poses at `pose_hz` with 1 mm / 3 mrad noise.
+Recording SimulatedRecording(const std::string& model, const std::vector<std::string>& effects,
+                             const std::map<std::string, double>& truth,
+                             const std::vector<double>& lo, const std::vector<double>& hi,
+                             double duration_s, double pose_hz, uint64_t seed) {
+  const System sys = MakeSystem(model, effects);
+  VecN<kMaxState> p(sys.num_params());
   p.setZero();
-  p[truth.ParamIndex("r_l")] = 0.031;
-  p[truth.ParamIndex("r_r")] = 0.0313;
-  p[truth.ParamIndex("d")] = 0.148;
-  p[truth.ParamIndex("delay_s")] = 0.05;
-  std::mt19937_64 rng(5);
+  for (const auto& [name, v] : truth) p[sys.ParamIndex(name)] = v;
+  std::mt19937_64 rng(seed);
   Recording rec;
-  rec.source = "simulated diffdrive";
-  rec.controls = ControlSignal(truth.num_controls(), 0);
+  rec.source = "simulated " + model;
+  rec.controls = ControlSignal(sys.num_controls(), 0);
   const TimeNs t1 = SecondsToNs(duration_s);
-  const std::vector<double> lo = {-10.0, -10.0}, hi = {25.0, 25.0};
   AppendPiecewiseRandom(&rec.controls, 0, t1, lo, hi, 0.7, 2.5, rng);
-  const auto times = FrameTimes(0, t1, FrameTimingOptions{20.0, 0.0, 0.0, 0.0}, rng);
-  const StateVec x0 = truth.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
-  const auto traj = SimulateTruth(truth, x0, rec.controls, times);
+  const auto times = FrameTimes(0, t1, FrameTimingOptions{pose_hz, 0.0, 0.0, 0.0}, rng);
+  const StateVec x0 = sys.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
+  const auto traj = SimulateTruth(sys, x0, rec.controls, times);
   const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
   for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
   return rec;
+}
+
+Recording DiffDriveRecording(double duration_s) {
+  return SimulatedRecording("diffdrive", {"time_offset"},
+                            {{"r_l", 0.031}, {"r_r", 0.0313}, {"d", 0.148}, {"delay_s", 0.05}},
+                            {-10.0, -10.0}, {25.0, 25.0}, duration_s, 20.0, 5);
 }
 
 void BM_AnalyzeVsLength(benchmark::State& state) {
@@ -125,22 +133,9 @@ BENCHMARK(BM_AnalyzeMrclam)
     ->UseRealTime();
 
 Recording UnicycleRecording(double duration_s) {
-  const System truth = MakeSystem("unicycle", {"time_offset", "turn_slowdown"});
-  VecN<kMaxState> p(truth.num_params());
-  p << 0.95, 0.9, 0.2, 0.5;
-  std::mt19937_64 rng(7);
-  Recording rec;
-  rec.source = "simulated unicycle";
-  rec.controls = ControlSignal(truth.num_controls(), 0);
-  const TimeNs t1 = SecondsToNs(duration_s);
-  const std::vector<double> lo = {-0.3, -1.5}, hi = {1.0, 1.5};
-  AppendPiecewiseRandom(&rec.controls, 0, t1, lo, hi, 0.7, 2.5, rng);
-  const auto times = FrameTimes(0, t1, FrameTimingOptions{100.0, 0.0, 0.0, 0.0}, rng);
-  const StateVec x0 = truth.MakeState(0.0, 0.0, 0.3, p, rec.controls, 0.0);
-  const auto traj = SimulateTruth(truth, x0, rec.controls, times);
-  const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
-  for (const auto& m : MeasurePoses(traj, R, 0, rng)) rec.poses.push_back({m.t_ns, m.z});
-  return rec;
+  return SimulatedRecording("unicycle", {"time_offset", "turn_slowdown"},
+                            {{"k_v", 0.95}, {"k_omega", 0.9}, {"delay_s", 0.2}, {"c_slow", 0.5}},
+                            {-0.3, -1.5}, {1.0, 1.5}, duration_s, 100.0, 7);
 }
 
 void BM_AnalyzeDefaultsVsLength(benchmark::State& state) {

@@ -138,6 +138,13 @@ BENCHMARK(BM_DaemonReplayFormat)
     ->Unit(benchmark::kMillisecond)
     ->Iterations(3);
 
+void ReportLatency(benchmark::State& state, const DaemonCounters& c) {
+  state.counters["latency_p50_ms"] = c.latency_p50_ms;
+  state.counters["latency_p99_ms"] = c.latency_p99_ms;
+  state.counters["latency_max_ms"] = c.latency_max_ms;
+  state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
+}
+
 // The frame-to-publish latency while the effect search runs in the background: the
 // simulated robot with a hidden lag (config/kincald_sim_lag.yaml, robot.effects: auto) at
 // --speed 1 for 100 s, during which the search runs and adds the lag.
@@ -152,11 +159,8 @@ void BM_DaemonLatencyDuringEffectSearch(benchmark::State& state) {
     d.Run();
     c = d.counters();
   }
-  state.counters["latency_p50_ms"] = c.latency_p50_ms;
-  state.counters["latency_p99_ms"] = c.latency_p99_ms;
-  state.counters["latency_max_ms"] = c.latency_max_ms;
+  ReportLatency(state, c);
   state.counters["effects_added"] = static_cast<double>(c.effects_added);
-  state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
 }
 BENCHMARK(BM_DaemonLatencyDuringEffectSearch)->Unit(benchmark::kMillisecond)->Iterations(1);
 
@@ -172,10 +176,7 @@ void BM_DaemonLatencySpeed1(benchmark::State& state) {
     d.Run();
     c = d.counters();
   }
-  state.counters["latency_p50_ms"] = c.latency_p50_ms;
-  state.counters["latency_p99_ms"] = c.latency_p99_ms;
-  state.counters["latency_max_ms"] = c.latency_max_ms;
-  state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
+  ReportLatency(state, c);
   state.counters["peak_rss_mb"] = PeakRssMb();
 }
 BENCHMARK(BM_DaemonLatencySpeed1)->Unit(benchmark::kMillisecond)->Iterations(1);
