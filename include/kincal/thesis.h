@@ -84,7 +84,9 @@ struct ThesisOptions {
   FrameTimingOptions timing{6.0, 0.4, 0.25, 0.0};
   double min_frames = 20.0;
   WheelRateErrors wheel;
-  double stamp_step_s = 0.0;  // frames stamped on a timer of this tick (floor); 0: exact
+  // Frames stamped on the recording clock's timer of this tick (floored); 0: exact. Through
+  // pixels the estimators take the tick's middle and its variance.
+  double stamp_step_s = 0.0;
   // Frames per run; 0: one full turn of the true robot, at least min_frames periods.
   int frames_per_run = 0;
   // Poses through pixels (the Table 6-3 camera) instead of truth plus Gaussian noise.
