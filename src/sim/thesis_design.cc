@@ -42,6 +42,17 @@ std::array<double, 2> Realised(const ThesisOptions& o, const ThesisDesign& d, in
           RealisedWheelRate(kThesisControls[k][1], 1, o.wheel, d.gains)};
 }
 
+// The true target poses of a run driven by the realised controls from its start pose.
+std::vector<TrajectoryPoint> RunTruth(const System& truth, const Eigen::Vector3d& params,
+                                      const ThesisDesign& d, const ThesisRun& run,
+                                      std::span<const TimeNs> times) {
+  const VecN<kMaxState> p = params;
+  const Eigen::Vector3d& s = run.start_pose;
+  const StateVec x0 =
+      truth.MakeState(s.x(), s.y(), s.z(), p, d.realised, d.realised.ToSeconds(run.t0));
+  return SimulateTruth(truth, x0, d.realised, times);
+}
+
 // The first round's world: runs of a full turn, Gaussian pose noise, random start poses
 // (the random stream in the order earlier results were drawn with).
 ThesisDesign IdealDesign(const System& truth, const Eigen::Vector3d& params, const ThesisOptions& o,
@@ -70,10 +81,7 @@ ThesisDesign IdealDesign(const System& truth, const Eigen::Vector3d& params, con
     // In a fixed sequence (argument order is unspecified): heading, y, x, as GCC evaluated it.
     const double sth = ang(rng), sy = pos(rng), sx = pos(rng);
     run.start_pose = Eigen::Vector3d(sx, sy, sth);
-    VecN<kMaxState> p = params;
-    const StateVec x0 = truth.MakeState(sx, sy, sth, p, d.realised, d.realised.ToSeconds(run.t0));
-    const auto traj = SimulateTruth(truth, x0, d.realised, times);
-    run.meas = MeasurePoses(traj, R, run.index, rng);
+    run.meas = MeasurePoses(RunTruth(truth, params, d, run, times), R, run.index, rng);
     StampOnTick(o, &run.meas);
     d.all.insert(d.all.end(), run.meas.begin(), run.meas.end());
     d.starts.push_back(run.start_pose);
@@ -133,11 +141,7 @@ Eigen::Matrix3d TickCovariance(const ThesisOptions& o, double wl, double wr, dou
 void MeasureRun(const System& truth, const Eigen::Vector3d& params, const ThesisOptions& o,
                 PixelPoseMeter* meter, std::span<const TimeNs> times, ThesisDesign* d,
                 ThesisRun* run, std::mt19937_64& rng) {
-  VecN<kMaxState> p = params;
-  const Eigen::Vector3d& s = run->start_pose;
-  const StateVec x0 =
-      truth.MakeState(s.x(), s.y(), s.z(), p, d->realised, d->realised.ToSeconds(run->t0));
-  const auto traj = SimulateTruth(truth, x0, d->realised, times);
+  const auto traj = RunTruth(truth, params, *d, *run, times);
   PoseErrorStats& st = d->pose_errors;
   for (const auto& tp : traj) {
     PoseMeasurement m;
@@ -193,12 +197,11 @@ ThesisDesign RealisticDesign(const System& truth, const Eigen::Vector3d& params,
     } else {
       std::uniform_real_distribution<double> pos(-0.2, 0.2),
           ang(-std::numbers::pi, std::numbers::pi);
-      run.start_pose = Eigen::Vector3d(pos(rng), pos(rng), ang(rng));
-      VecN<kMaxState> p = params;
-      const Eigen::Vector3d& s = run.start_pose;
-      const StateVec x0 =
-          truth.MakeState(s.x(), s.y(), s.z(), p, d.realised, d.realised.ToSeconds(run.t0));
-      run.meas = MeasurePoses(SimulateTruth(truth, x0, d.realised, times), R, k, rng);
+      // In a fixed sequence (argument order is unspecified): heading, y, x, as GCC evaluated
+      // the constructor's arguments before.
+      const double sth = ang(rng), sy = pos(rng), sx = pos(rng);
+      run.start_pose = Eigen::Vector3d(sx, sy, sth);
+      run.meas = MeasurePoses(RunTruth(truth, params, d, run, times), R, k, rng);
       StampOnTick(o, &run.meas);
     }
     d.all.insert(d.all.end(), run.meas.begin(), run.meas.end());

@@ -145,7 +145,7 @@ BatchOptions WithoutLoss(BatchOptions o) {
   return o;
 }
 
-// The system with the look-up-table gains, and its true parameter vector.
+// The system with the look-up-table gains, and how many speed bands it has.
 struct GainModel {
   std::unique_ptr<System> sys;
   int bands = 0;
