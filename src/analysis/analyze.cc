@@ -113,13 +113,9 @@ using analysis::Fit;
 using analysis::SelectionState;
 using analysis::Tried;
 
-// Progress of the selection, for the progress callback: 0.3 at the first candidate of the
-// first round, 0.9 after the last round.
-double SelectionProgress(int round, size_t candidate, size_t candidates, int max_rounds) {
-  return 0.3 +
-         0.6 * ((round - 1) + static_cast<double>(candidate) / static_cast<double>(candidates)) /
-             max_rounds;
-}
+// Progress of the selection, for the progress callback: 0.3 at the start of the first
+// round, 0.9 after the last round.
+double SelectionProgress(int round, int max_rounds) { return 0.3 + 0.6 * (round - 1) / max_rounds; }
 
 // The best candidate: supported by the criterion and improving the held-out error most.
 Tried* Winner(std::vector<Tried>* tried, double min_gain) {
@@ -148,12 +144,11 @@ std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidate
   }
   // Parallel over candidates, each solve on one thread: the result does not depend on
   // the thread count.
-  const int threads = std::max(1, o.num_threads);
   std::vector<analysis::Screened> screened(todo.size());
   std::vector<char> made(todo.size(), 0);
-  analysis::ParallelFor(todo.size(), threads, [&](size_t i) {
+  analysis::ParallelFor(todo.size(), o.num_threads, [&](size_t i) {
     made[i] = analysis::ScreenEffect(todo[i], current, d, model, command_lag,
-                                     o.effects_mode == "list", 1, &screened[i]);
+                                     o.effects_mode == "list", &screened[i]);
   });
   // Rank by screening cost (ties by candidate order); confirm the leading ones.
   std::vector<size_t> order;
@@ -169,22 +164,19 @@ std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidate
   const size_t confirm = o.confirm_candidates == 0
                              ? order.size()
                              : std::min(order.size(), static_cast<size_t>(o.confirm_candidates));
-  std::vector<char> chosen(todo.size(), 0);
+  std::vector<size_t> confirm_idx;
   for (size_t r = 0; r < order.size(); ++r) {
     if (r < confirm && screened[order[r]].ok) {
-      chosen[order[r]] = 1;
+      confirm_idx.push_back(order[r]);
     } else {
       screened_out->push_back(analysis::ScreenedOut(
           screened[order[r]], round, static_cast<int>(r) + 1, static_cast<int>(order.size())));
     }
   }
-  std::vector<size_t> confirm_idx;
-  for (size_t i = 0; i < todo.size(); ++i) {
-    if (chosen[i]) confirm_idx.push_back(i);
-  }
+  std::sort(confirm_idx.begin(), confirm_idx.end());  // back to candidate order
   std::vector<Tried> tried(confirm_idx.size());
-  analysis::ParallelFor(confirm_idx.size(), threads, [&](size_t k) {
-    analysis::ConfirmEffect(screened[confirm_idx[k]], round, current, d, 1, &tried[k]);
+  analysis::ParallelFor(confirm_idx.size(), o.num_threads, [&](size_t k) {
+    analysis::ConfirmEffect(screened[confirm_idx[k]], round, current, d, &tried[k]);
   });
   // Each candidate's own parameters, for the next round's warm start.
   for (const auto& sc : screened) {
@@ -264,7 +256,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   std::vector<std::string> accepted = o.base_effects;
   const auto candidates = analysis::Candidates(*model, o);
   for (int round = 1; round <= o.max_effects && !candidates.empty(); ++round) {
-    progress(SelectionProgress(round, 0, 1, o.max_effects), "round " + std::to_string(round));
+    progress(SelectionProgress(round, o.max_effects), "round " + std::to_string(round));
     std::map<std::string, Eigen::VectorXd> warm;
     std::vector<Tried> tried = RunRound(round, candidates, accepted, current, d, model, command_lag,
                                         o, &res.trials, &warm);

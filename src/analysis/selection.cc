@@ -82,7 +82,7 @@ FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
 
 bool ScreenEffect(const std::string& spec, const SelectionState& current, const Dataset& d,
                   const std::shared_ptr<const KinematicModel>& model, double command_lag,
-                  bool user_list, int threads, Screened* out) {
+                  bool user_list, Screened* out) {
   EffectSpec parsed;
   std::unique_ptr<Effect> made;
   Status status = ParseEffectSpec(spec, &parsed);
@@ -104,7 +104,7 @@ bool ScreenEffect(const std::string& spec, const SelectionState& current, const 
   const auto warm = current.warm.find(spec);
   const Eigen::VectorXd* w = warm == current.warm.end() ? nullptr : &warm->second;
   for (const auto& s : Starts(sys, *eff, current.fit.p, command_lag, w)) {
-    Fit f = RunFit(sys, d.rec->controls, d.screen_meas, s, false, threads);
+    Fit f = RunFit(sys, d.rec->controls, d.screen_meas, s, false, 1);
     if (f.ok && (!out->fit.ok || f.cost < out->fit.cost)) out->fit = std::move(f);
   }
   out->ok = out->fit.ok;
@@ -112,15 +112,14 @@ bool ScreenEffect(const std::string& spec, const SelectionState& current, const 
 }
 
 void ConfirmEffect(const Screened& s, int round, const SelectionState& current, const Dataset& d,
-                   int threads, Tried* out) {
+                   Tried* out) {
   const System sys(s.model, s.effects);
   Tried& t = *out;
   t.trial.name = s.spec;
   t.trial.round = round;
   t.trial.signature_z = SignatureZ(s.effects.back()->signature(), current.diagnosis);
   t.effects = s.effects;
-  const Fit best =
-      RunFit(sys, d.rec->controls, d.fit_meas, s.fit.p, true, threads, kRefineIterations);
+  const Fit best = RunFit(sys, d.rec->controls, d.fit_meas, s.fit.p, true, 1, kRefineIterations);
   if (!best.ok) return;
   t.fit = best;
   t.eval = Evaluate(sys, best.p, d);

@@ -57,16 +57,16 @@ struct Screened {
 // when it was tried before; the command lag for timing effects; +-2 sigma for a single new
 // parameter tried for the first time). False when the effect cannot be made or combined
 // (from a user's effect list, `user_list`, a bad spec throws AnalysisError instead).
-// `threads`: Ceres's.
+// Each solve runs on one thread: candidates are screened in parallel instead.
 bool ScreenEffect(const std::string& spec, const SelectionState& current, const Dataset& d,
                   const std::shared_ptr<const KinematicModel>& model, double command_lag,
-                  bool user_list, int threads, Screened* out);
+                  bool user_list, Screened* out);
 
 // Confirms a screened candidate on every fit window (refined from its screening optimum,
 // with covariance), evaluates it on the held-out windows and scores it (quasi-BIC,
-// held-out gain, identifiability).
+// held-out gain, identifiability). One thread, as ScreenEffect.
 void ConfirmEffect(const Screened& s, int round, const SelectionState& current, const Dataset& d,
-                   int threads, Tried* out);
+                   Tried* out);
 
 // The record of a candidate that screening left out: not confirmed, never accepted.
 EffectTrial ScreenedOut(const Screened& s, int round, int rank, int ranked);

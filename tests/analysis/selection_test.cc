@@ -35,8 +35,8 @@ TEST(Selection, CandidatesAreTheEffectsThatApply) {
 bool Try(const std::string& spec, const SelectionState& current, const Dataset& d,
          const std::shared_ptr<const KinematicModel>& model, double lag, Tried* out) {
   Screened s;
-  if (!ScreenEffect(spec, current, d, model, lag, false, 1, &s) || !s.ok) return false;
-  ConfirmEffect(s, 1, current, d, 1, out);
+  if (!ScreenEffect(spec, current, d, model, lag, false, &s) || !s.ok) return false;
+  ConfirmEffect(s, 1, current, d, out);
   return out->fit.ok;
 }
 
