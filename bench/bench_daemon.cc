@@ -52,30 +52,44 @@ double PeakRssMb(const std::string& status = "/proc/self/status") {
   return 0.0;
 }
 
-void BM_DaemonReplayFast(benchmark::State& state) {
-  const std::string& log = Log();
+// Replays `c` (a replay configuration, --fast) once per benchmark iteration; frames/s.
+double ReplayFramesPerSecond(benchmark::State& state, const DaemonConfig& c) {
   int64_t frames = 0;
   double seconds = 0;
   for (auto _ : state) {
-    DaemonConfig c = Base();
-    c.source = SourceKind::kReplay;
-    c.replay.path = log;
-    c.replay.speed = 0;
     Daemon d(c);
     const auto t0 = std::chrono::steady_clock::now();
     d.Run();
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     frames += d.counters().frames_captured;
   }
-  state.counters["frames_per_s"] = static_cast<double>(frames) / seconds;
-  state.counters["x_realtime"] = static_cast<double>(frames) / 30.0 / seconds;
+  return static_cast<double>(frames) / seconds;
+}
+
+DaemonConfig FastReplayOf(const std::string& log) {
+  DaemonConfig c = Base();
+  c.source = SourceKind::kReplay;
+  c.replay.path = log;
+  c.replay.speed = 0;
+  return c;
+}
+
+void BM_DaemonReplayFast(benchmark::State& state) {
+  const double fps = ReplayFramesPerSecond(state, FastReplayOf(Log()));
+  state.counters["frames_per_s"] = fps;
+  state.counters["x_realtime"] = fps / 30.0;
   state.counters["peak_rss_mb"] = PeakRssMb();
 }
 BENCHMARK(BM_DaemonReplayFast)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 // A 10 s recording of the simulated robot at width x height with frames stored as
-// `encoding` (raw GREY, PNG, or JPEG replayed as MJPG), made once per case.
-std::string FormatLog(int width, int height, FrameEncoding encoding) {
+// `encoding` (raw GREY, PNG, or JPEG replayed as MJPG), made once per case, and the camera
+// file it was rendered with (empty: the default 640x480 camera).
+struct FormatRecording {
+  std::string log, intrinsics;
+};
+
+FormatRecording RecordFormat(int width, int height, FrameEncoding encoding) {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string stem = "kincal_bench_" + std::to_string(::getpid()) + "_" +
                            std::to_string(width) + "_" + std::string(FrameEncodingName(encoding));
@@ -88,7 +102,7 @@ std::string FormatLog(int width, int height, FrameEncoding encoding) {
     cam.cx = 0.5 * (width - 1);
     cam.cy = 0.5 * (height - 1);
     c.camera.intrinsics = (dir / (stem + ".yaml")).string();
-    if (!vision::WriteCameraYaml(cam, c.camera.intrinsics).ok()) return "";
+    if (!vision::WriteCameraYaml(cam, c.camera.intrinsics).ok()) return {};
   }
   c.sim.speed = 0;
   c.sim.duration_s = 10;
@@ -96,37 +110,25 @@ std::string FormatLog(int width, int height, FrameEncoding encoding) {
   c.record.frame_encoding = encoding;
   Daemon d(c);
   d.Run();
-  return c.record.path;
+  return {c.record.path, c.camera.intrinsics};
 }
 
 // Replay throughput (--fast) by frame format and size: decoding is the difference.
 void BM_DaemonReplayFormat(benchmark::State& state) {
   const int width = static_cast<int>(state.range(0)), height = static_cast<int>(state.range(1));
   const auto encoding = static_cast<FrameEncoding>(state.range(2));
-  const std::string log = FormatLog(width, height, encoding);
-  if (log.empty()) {
+  const FormatRecording rec = RecordFormat(width, height, encoding);
+  if (rec.log.empty()) {
     state.SkipWithError("could not write the camera file");
     return;
   }
-  DaemonConfig c = Base();
-  c.camera.intrinsics =
-      width != 640 || height != 480 ? log.substr(0, log.size() - 4) + ".yaml" : std::string();
-  c.source = SourceKind::kReplay;
-  c.replay.path = log;
-  c.replay.speed = 0;
-  int64_t frames = 0;
-  double seconds = 0;
-  for (auto _ : state) {
-    Daemon d(c);
-    const auto t0 = std::chrono::steady_clock::now();
-    d.Run();
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    frames += d.counters().frames_captured;
-  }
-  state.counters["frames_per_s"] = static_cast<double>(frames) / seconds;
-  state.counters["log_mb"] = static_cast<double>(std::filesystem::file_size(log)) / 1e6;
+  DaemonConfig c = FastReplayOf(rec.log);
+  c.camera.intrinsics = rec.intrinsics;
+  state.counters["frames_per_s"] = ReplayFramesPerSecond(state, c);
+  state.counters["log_mb"] = static_cast<double>(std::filesystem::file_size(rec.log)) / 1e6;
   state.SetLabel(std::string(FrameEncodingName(encoding)));
-  std::filesystem::remove(log);
+  std::filesystem::remove(rec.log);
+  if (!rec.intrinsics.empty()) std::filesystem::remove(rec.intrinsics);
 }
 BENCHMARK(BM_DaemonReplayFormat)
     ->Args({640, 480, static_cast<int>(FrameEncoding::kRaw)})
@@ -168,9 +170,7 @@ void BM_DaemonLatencySpeed1(benchmark::State& state) {
   const std::string& log = Log();
   DaemonCounters c{};
   for (auto _ : state) {
-    DaemonConfig cfg = Base();
-    cfg.source = SourceKind::kReplay;
-    cfg.replay.path = log;
+    DaemonConfig cfg = FastReplayOf(log);
     cfg.replay.speed = 1;
     Daemon d(cfg);
     d.Run();
