@@ -273,6 +273,64 @@ void LabelRuns(const cv::Mat& view, int thr, std::vector<Blob>* blobs) {
   }
 }
 
+// Intensity-weighted centre of blob `b` over its box grown by kCentroidMarginPx. The
+// marker level is the darkest (brightest) quarter of the foreground pixels inside the
+// box; the background level is the median of the window's border. A pixel's weight is its depth
+// below the background in units of the contrast, capped at 1 but not floored at 0: noise on the
+// background pixels then averages out, where clipping it at 0 would pull the centre
+// towards the middle of the window, by up to a fifth of the noise's own scatter
+// (Markers.HeavyNoiseScattersTheCentreWithoutBiasingIt). False without contrast.
+bool WeightedCentre(const cv::Mat& view, const Blob& b, int thr, bool dark_on_light,
+                    Eigen::Vector2d* centre, double* weight) {
+  const int g = kCentroidMarginPx;
+  const int x0 = std::max(0, b.x0 - g), y0 = std::max(0, b.y0 - g);
+  const int x1 = std::min(view.cols - 1, b.x1 + g), y1 = std::min(view.rows - 1, b.y1 + g);
+  thread_local std::vector<double> border, inner;
+  border.clear();
+  inner.clear();
+  for (int x = x0; x <= x1; ++x) {
+    border.push_back(view.at<uint8_t>(y0, x));
+    border.push_back(view.at<uint8_t>(y1, x));
+  }
+  for (int y = y0 + 1; y < y1; ++y) {
+    border.push_back(view.at<uint8_t>(y, x0));
+    border.push_back(view.at<uint8_t>(y, x1));
+  }
+  const auto mid = border.begin() + static_cast<long>(border.size() / 2);
+  std::nth_element(border.begin(), mid, border.end());
+  const double bg = *mid;
+  for (int y = b.y0; y <= b.y1; ++y) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = b.x0; x <= b.x1; ++x) {
+      if (dark_on_light ? row[x] <= thr : row[x] > thr) inner.push_back(row[x]);
+    }
+  }
+  if (inner.empty()) return false;
+  const auto q = inner.begin() + static_cast<long>(inner.size() / kForegroundQuantileDivisor);
+  if (dark_on_light) {
+    std::nth_element(inner.begin(), q, inner.end());
+  } else {
+    std::nth_element(inner.begin(), q, inner.end(), std::greater<double>());
+  }
+  const double span = bg - *q;
+  if (std::abs(span) < 1e-9 || (dark_on_light ? span < 0 : span > 0)) return false;
+  double sw = 0, su = 0, sv = 0;
+  const double inv = 1.0 / span;
+  for (int y = y0; y <= y1; ++y) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = x0; x <= x1; ++x) {
+      const double w = std::min((bg - row[x]) * inv, 1.0);
+      sw += w;
+      su += w * x;
+      sv += w * y;
+    }
+  }
+  if (!(sw > 0.0)) return false;
+  *centre = Eigen::Vector2d(su / sw, sv / sw);
+  *weight = sw;
+  return true;
+}
+
 }  // namespace
 
 std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& opt, cv::Rect roi,
@@ -344,61 +402,16 @@ std::vector<Marker> DetectMarkers(const cv::Mat& grey, const DetectorOptions& op
       reject("fill ratio " + std::to_string(fill).substr(0, 4));
       continue;
     }
-    // Intensity-weighted centre over the blob's box grown by kCentroidMarginPx: background
-    // level from the box border (median), marker level from the darkest (brightest)
-    // quarter of the foreground pixels inside the box.
-    const int g = kCentroidMarginPx;
-    const int x0 = std::max(0, bx - g), y0 = std::max(0, by - g);
-    const int x1 = std::min(view.cols - 1, bx + bw - 1 + g);
-    const int y1 = std::min(view.rows - 1, by + bh - 1 + g);
-    thread_local std::vector<double> border, inner;
-    border.clear();
-    inner.clear();
-    for (int x = x0; x <= x1; ++x) {
-      border.push_back(view.at<uint8_t>(y0, x));
-      border.push_back(view.at<uint8_t>(y1, x));
-    }
-    for (int y = y0 + 1; y < y1; ++y) {
-      border.push_back(view.at<uint8_t>(y, x0));
-      border.push_back(view.at<uint8_t>(y, x1));
-    }
-    std::nth_element(border.begin(), border.begin() + static_cast<long>(border.size() / 2),
-                     border.end());
-    const double bg = border[border.size() / 2];
-    for (int y = by; y < by + bh; ++y) {
-      const uint8_t* row = view.ptr<uint8_t>(y);
-      for (int x = bx; x < bx + bw; ++x) {
-        if (opt.dark_on_light ? row[x] <= thr : row[x] > thr) inner.push_back(row[x]);
-      }
-    }
-    const size_t q = inner.size() / kForegroundQuantileDivisor;
-    if (opt.dark_on_light) {
-      std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end());
-    } else {
-      std::nth_element(inner.begin(), inner.begin() + static_cast<long>(q), inner.end(),
-                       std::greater<double>());
-    }
-    const double fg = inner[q];
-    const double span = bg - fg;
-    if (std::abs(span) < 1e-9 || (opt.dark_on_light ? span < 0 : span > 0)) {
+    Eigen::Vector2d centre;
+    double weight = 0.0;
+    if (!WeightedCentre(view, b, thr, opt.dark_on_light, &centre, &weight)) {
       reject("no contrast");
       continue;
     }
-    double sw = 0, su = 0, sv = 0;
-    const double inv = 1.0 / span;
-    for (int y = y0; y <= y1; ++y) {
-      const uint8_t* row = view.ptr<uint8_t>(y);
-      for (int x = x0; x <= x1; ++x) {
-        const double w = std::clamp((bg - row[x]) * inv, 0.0, 1.0);
-        sw += w;
-        su += w * x;
-        sv += w * y;
-      }
-    }
     Marker m;
-    m.centre_px = Eigen::Vector2d(su / sw + roi.x, sv / sw + roi.y);
-    m.area_px = sw;
-    m.diameter_px = 2.0 * std::sqrt(sw / M_PI);
+    m.centre_px = centre + Eigen::Vector2d(roi.x, roi.y);
+    m.area_px = weight;
+    m.diameter_px = 2.0 * std::sqrt(weight / M_PI);
     out.push_back(m);
   }
   return out;
