@@ -27,5 +27,6 @@ Command AddRender(CLI::App& app);
 Command AddDetect(CLI::App& app);
 Command AddFloorcal(CLI::App& app);
 Command AddExport(CLI::App& app);
+Command AddImport(CLI::App& app);
 
 }  // namespace kincal::app

@@ -59,6 +59,8 @@ int main(int argc, char** argv) {
   auto* exp = app.add_subcommand(
       "export", "write calibrated parameters (with sigma) as YAML for a robot's config");
   commands[exp] = kincal::app::AddExport(*exp);
+  auto* imp = app.add_subcommand("import", "a ROS 1 or ROS 2 bag to a kincal LCM log (rosbags)");
+  commands[imp] = kincal::app::AddImport(*imp);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

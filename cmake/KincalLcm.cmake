@@ -45,5 +45,7 @@ function(kincal_lcm_types target)
   add_library(kincal::lcmtypes ALIAS ${target})
   install(DIRECTORY ${cpp_dir}/kincal DESTINATION include/kincal/lcmtypes)
   install(DIRECTORY ${py_dir}/kincal DESTINATION lib/python3/dist-packages)
+  # A second copy where the installed scripts look (they run in a venv of their own).
+  install(DIRECTORY ${py_dir}/kincal DESTINATION share/kincal/python)
   install(FILES ${sources} DESTINATION share/kincal/lcm)
 endfunction()

@@ -182,4 +182,48 @@ Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   return WriteFileAtomically(dir + "/report.json", j.dump(2) + "\n", "report");
 }
 
+Status ReadReportEstimate(const std::string& path, ReportEstimate* out) {
+  std::ifstream in(path);
+  if (!in) return Status::Error(path + ": cannot open for reading");
+  json j;
+  try {
+    j = json::parse(in);
+  } catch (const json::exception& e) {
+    return Status::Error(path + ": not JSON (" + e.what() + ")");
+  }
+  auto field = [&](const json& o, const char* key, json::value_t type) -> const json* {
+    const auto it = o.find(key);
+    return it != o.end() && it->type() == type ? &*it : nullptr;
+  };
+  const json* model = field(j, "model", json::value_t::string);
+  const json* after = field(j, "after", json::value_t::object);
+  const json* params = after ? field(*after, "params", json::value_t::object) : nullptr;
+  const json* effects = after ? field(*after, "effects", json::value_t::array) : nullptr;
+  if (!model || !params || !effects) {
+    return Status::Error(path +
+                         ": expected a kincal analyze report (model, after.params, "
+                         "after.effects)");
+  }
+  ReportEstimate r;
+  r.model = model->get<std::string>();
+  if (const json* src = field(j, "source", json::value_t::string))
+    r.source = src->get<std::string>();
+  for (const auto& e : *effects) {
+    if (!e.is_string()) return Status::Error(path + ": after.effects: expected names");
+    r.effects.push_back(e.get<std::string>());
+  }
+  for (const auto& [name, p] : params->items()) {
+    const auto v = p.find("value"), s = p.find("sigma");
+    if (!p.is_object() || v == p.end() || s == p.end() || !v->is_number() || !s->is_number()) {
+      return Status::Error(path + ": after.params." + name + ": expected {value, sigma, unit}");
+    }
+    r.names.push_back(name);
+    r.values.push_back(v->get<double>());
+    r.sigmas.push_back(s->get<double>());
+    r.units.push_back(p.value("unit", std::string()));
+  }
+  *out = std::move(r);
+  return Status();
+}
+
 }  // namespace kincal

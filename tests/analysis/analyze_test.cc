@@ -6,7 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
+#include <fstream>
 #include <random>
 
 #include "analysis/analysis_test_util.h"
@@ -198,6 +200,32 @@ TEST(Clean, NoEffectIsInventedOnCleanData) {
     }
   }
   EXPECT_LE(false_accepts, 1) << detail;
+}
+
+// `kincal export --report` reads back what the report says: the final estimate by name.
+TEST(Report, TheFinalEstimateReadsBack) {
+  const Case c{0, {}, 3};
+  const auto sc = AllModelScenarios()[0];
+  const AnalyzeResult r = Analyze(SimulateRecording(c, 40.0), FastOptions(sc.model));
+  const std::string dir = ::testing::TempDir() + "kincal_report_readback";
+  ASSERT_TRUE(WriteAnalysisReport(r, dir).ok());
+  ReportEstimate e;
+  ASSERT_TRUE(ReadReportEstimate(dir + "/report.json", &e).ok());
+  EXPECT_EQ(e.model, sc.model);
+  EXPECT_EQ(e.effects, r.after.effects);
+  ASSERT_EQ(e.names.size(), r.after.params.size());
+  for (const auto& p : r.after.params) {
+    const auto it = std::find(e.names.begin(), e.names.end(), p.name);
+    ASSERT_NE(it, e.names.end()) << p.name;
+    const size_t i = static_cast<size_t>(it - e.names.begin());
+    EXPECT_DOUBLE_EQ(e.values[i], p.value) << p.name;
+    EXPECT_DOUBLE_EQ(e.sigmas[i], p.sigma) << p.name;
+  }
+  std::ofstream(dir + "/broken.json") << "{\"model\": \"diffdrive\"}";
+  const Status s = ReadReportEstimate(dir + "/broken.json", &e);
+  ASSERT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("broken.json"), std::string::npos);
+  EXPECT_NE(s.message().find("after.params"), std::string::npos);
 }
 
 }  // namespace

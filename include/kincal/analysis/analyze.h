@@ -146,4 +146,14 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& options);
 // not at all (kincal/io/output_file.h). An error names the file and errno's text.
 Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir);
 
+// The final estimate of a report.json WriteAnalysisReport wrote: model, accepted effects,
+// parameters with units and sigma (a diagonal covariance: the report keeps no more).
+struct ReportEstimate {
+  std::string model, source;
+  std::vector<std::string> effects, names, units;
+  std::vector<double> values, sigmas;
+};
+// An error names the file and the field that is missing or not what was expected.
+Status ReadReportEstimate(const std::string& path, ReportEstimate* out);
+
 }  // namespace kincal
