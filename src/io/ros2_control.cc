@@ -17,9 +17,9 @@ struct Entry {
 };
 
 struct Mapped {
-  std::string controller;              // ros2_controllers' type name
-  std::vector<Entry> entries;          // under ros__parameters
-  std::vector<std::string> notes;      // comment lines above them
+  std::string controller;          // ros2_controllers' type name
+  std::vector<Entry> entries;      // under ros__parameters
+  std::vector<std::string> notes;  // comment lines above them
 };
 
 // A model parameter's value and sigma by name.
@@ -162,8 +162,8 @@ bool Ros2ControlOptions::IsValid(std::string* error) const {
   }
   for (const auto& [key, value] : nominal) {
     if (key != "wheel_radius" && key != "wheel_separation" && key != "drive_ticks_per_rad") {
-      *error = "nominal '" + key +
-               "': expected wheel_radius, wheel_separation or drive_ticks_per_rad";
+      *error =
+          "nominal '" + key + "': expected wheel_radius, wheel_separation or drive_ticks_per_rad";
       return false;
     }
     if (!(std::isfinite(value) && value > 0.0)) {
