@@ -78,6 +78,13 @@ std::vector<vision::CalibrationView> ViewsFromImages(const std::string& dir, con
   return views;
 }
 
+// cam.yaml -> cam.camera_info.yaml, beside it.
+std::string CameraInfoPath(const std::string& out) {
+  std::filesystem::path p(out);
+  p.replace_extension();
+  return p.string() + ".camera_info.yaml";
+}
+
 }  // namespace
 
 Command AddCamcal(CLI::App& app) {
@@ -91,7 +98,10 @@ Command AddCamcal(CLI::App& app) {
                  "KIND:COLSxROWS:PITCH (chessboard, circles, acircles; metres)");
   app.add_option("--points", a->points, "points file, header view,X,Y,Z,u,v");
   app.add_option("--image-size", a->size, "WxH (with --points)");
-  app.add_option("--out", a->out, "OpenCV FileStorage YAML to write")->required();
+  app.add_option("--out", a->out,
+                 "OpenCV FileStorage YAML to write; ROS camera_info YAML goes beside it "
+                 "(NAME.camera_info.yaml)")
+      ->required();
   app.add_option("--json", a->json, "JSON with values, 1-sigma and rms_px");
   app.add_flag("--k3", a->k3, "also estimate k3");
   return [a]() -> int {
@@ -125,6 +135,9 @@ Command AddCamcal(CLI::App& app) {
     const auto r = vision::CalibrateCamera(views, opt);
     if (const Status s = vision::WriteCameraYaml(r.camera, a->out); !s.ok())
       throw std::runtime_error(s.message());
+    const std::string ros = CameraInfoPath(a->out);
+    if (const Status s = vision::WriteCameraInfoYaml(r.camera, "kincal", ros); !s.ok())
+      throw std::runtime_error(s.message());
     // OpenCV on the same points.
     const auto cv_result = vision::CalibrateWithOpenCv(views, opt, r.camera);
     const double cv_rms = cv_result.rms_px;
@@ -144,7 +157,7 @@ Command AddCamcal(CLI::App& app) {
     }
     std::cout << std::setw(6) << "rms" << std::setw(16) << r.rms_px << std::setw(14) << ""
               << std::setw(16) << cv_rms << "  px\n";
-    std::cout << "wrote " << a->out << "\n";
+    std::cout << "wrote " << a->out << " and " << ros << " (ROS camera_info)\n";
     if (!a->json.empty()) {
       nlohmann::json j, s, o;
       for (int i = 0; i < np; ++i) {

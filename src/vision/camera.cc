@@ -1,9 +1,15 @@
 #include "kincal/vision/camera.h"
 
+#include <yaml-cpp/yaml.h>
+
 #include <Eigen/Dense>
 #include <cmath>
+#include <fstream>
+#include <iomanip>
 #include <opencv2/core.hpp>
+#include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "kincal/io/output_file.h"
 
@@ -50,7 +56,75 @@ bool CameraModel::IsValid(std::string* error) const {
   return true;
 }
 
+namespace {
+
+// ROS camera_info YAML (camera_calibration_parsers' keys), through yaml-cpp: it carries no
+// %YAML directive, without which OpenCV's reader refuses a file.
+CameraModel ReadRosCameraInfo(const std::string& path) {
+  YAML::Node n;
+  try {
+    n = YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw std::runtime_error(path + ": not YAML (" + e.what() + ")");
+  }
+  auto need = [&](const char* key) {
+    if (!n.IsMap() || !n[key]) throw std::runtime_error(path + ": missing key '" + key + "'");
+    return n[key];
+  };
+  auto data = [&](const char* key, size_t at_least) {
+    std::vector<double> v;
+    try {
+      v = need(key)["data"].as<std::vector<double>>();
+    } catch (const YAML::Exception&) {
+      throw std::runtime_error(path + ": " + key + ".data: expected a list of numbers");
+    }
+    if (v.size() < at_least) {
+      throw std::runtime_error(path + ": " + key + ".data: expected at least " +
+                               std::to_string(at_least) + " numbers");
+    }
+    return v;
+  };
+  if (n.IsMap() && n["distortion_model"]) {
+    const auto model = n["distortion_model"].as<std::string>("");
+    if (model != "plumb_bob" && model != "rational_polynomial") {
+      throw std::runtime_error(path + ": distortion_model '" + model +
+                               "': expected plumb_bob (or rational_polynomial)");
+    }
+  }
+  const std::vector<double> k = data("camera_matrix", 9), d = data("distortion_coefficients", 4);
+  CameraModel c;
+  try {
+    c.width = need("image_width").as<int>();
+    c.height = need("image_height").as<int>();
+  } catch (const YAML::Exception&) {
+    throw std::runtime_error(path + ": image_width and image_height: expected integers");
+  }
+  c.fx = k[0];
+  c.cx = k[2];
+  c.fy = k[4];
+  c.cy = k[5];
+  c.k1 = d[0];
+  c.k2 = d[1];
+  c.p1 = d[2];
+  c.p2 = d[3];
+  c.k3 = d.size() > 4 ? d[4] : 0.0;
+  std::string error;
+  if (!c.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  return c;
+}
+
+// OpenCV's YAML files open with a %YAML directive; camera_info files do not.
+bool IsRosCameraInfo(const std::string& path) {
+  std::ifstream in(path);
+  std::string first;
+  if (!std::getline(in, first)) return false;
+  return first.rfind("%YAML", 0) != 0 && first.rfind("<?xml", 0) != 0 && first.rfind("{", 0) != 0;
+}
+
+}  // namespace
+
 CameraModel ReadCameraYaml(const std::string& path) {
+  if (IsRosCameraInfo(path)) return ReadRosCameraInfo(path);
   cv::FileStorage fs;
   try {
     fs.open(path, cv::FileStorage::READ);
@@ -96,6 +170,31 @@ Status WriteCameraYaml(const CameraModel& c, const std::string& path) {
   fs << "image_width" << c.width << "image_height" << c.height << "camera_matrix" << K
      << "distortion_coefficients" << D;
   return WriteFileAtomically(path, fs.releaseAndGetString(), "camera calibration");
+}
+
+Status WriteCameraInfoYaml(const CameraModel& c, const std::string& camera_name,
+                           const std::string& path) {
+  std::ostringstream o;
+  o << std::setprecision(12);
+  auto row = [&o](std::initializer_list<double> v) {
+    o << "  data: [";
+    const char* sep = "";
+    for (double x : v) {
+      o << sep << x;
+      sep = ", ";
+    }
+    o << "]\n";
+  };
+  o << "image_width: " << c.width << "\nimage_height: " << c.height
+    << "\ncamera_name: " << camera_name << "\ncamera_matrix:\n  rows: 3\n  cols: 3\n";
+  row({c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1});
+  o << "distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n";
+  row({c.k1, c.k2, c.p1, c.p2, c.k3});
+  o << "rectification_matrix:\n  rows: 3\n  cols: 3\n";
+  row({1, 0, 0, 0, 1, 0, 0, 0, 1});
+  o << "projection_matrix:\n  rows: 3\n  cols: 4\n";
+  row({c.fx, 0, c.cx, 0, 0, c.fy, c.cy, 0, 0, 0, 1, 0});
+  return WriteFileAtomically(path, o.str(), "camera_info");
 }
 
 }  // namespace kincal::vision

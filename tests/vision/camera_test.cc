@@ -9,6 +9,7 @@
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <regex>
 
 #include "kincal/vision/calibration.h"
 #include "kincal/vision/markers.h"
@@ -58,6 +59,43 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
               std::string::npos)
+        << e.what();
+  }
+}
+
+// ROS camera_info YAML (camera_calibration_parsers' keys), read back by the same reader.
+TEST(Camera, RosCameraInfoYamlRoundTrip) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string path = (dir / "kincal_camera_info_test.yaml").string();
+  ASSERT_TRUE(WriteCameraInfoYaml(TestCamera(), "overhead", path).ok());
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* key : {"camera_name: overhead", "distortion_model: plumb_bob",
+                          "rectification_matrix:", "projection_matrix:\n  rows: 3\n  cols: 4"}) {
+    EXPECT_NE(text.find(key), std::string::npos) << key << "\n" << text;
+  }
+  const CameraModel c = ReadCameraYaml(path);
+  const CameraModel t = TestCamera();
+  EXPECT_EQ(c.width, t.width);
+  EXPECT_EQ(c.height, t.height);
+  for (const auto& [a, b] : {std::pair{c.fx, t.fx},
+                             {c.fy, t.fy},
+                             {c.cx, t.cx},
+                             {c.cy, t.cy},
+                             {c.k1, t.k1},
+                             {c.k2, t.k2},
+                             {c.p1, t.p1},
+                             {c.p2, t.p2},
+                             {c.k3, t.k3}}) {
+    EXPECT_DOUBLE_EQ(a, b);
+  }
+  const std::string fisheye = (dir / "kincal_camera_info_fisheye.yaml").string();
+  std::ofstream(fisheye) << std::regex_replace(text, std::regex("plumb_bob"), "equidistant");
+  try {
+    ReadCameraYaml(fisheye);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("distortion_model 'equidistant'"), std::string::npos)
         << e.what();
   }
 }

@@ -30,9 +30,14 @@ struct CameraModel {
 };
 
 // OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width,
-// image_height. Throws std::runtime_error naming the file and the missing key.
+// image_height; ROS camera_info YAML (camera_calibration_parsers' format, plumb_bob) is
+// read too. Throws std::runtime_error naming the file and the missing key.
 CameraModel ReadCameraYaml(const std::string& path);
 // Written whole or not at all (kincal/io/output_file.h); an error names the file.
 Status WriteCameraYaml(const CameraModel& cam, const std::string& path);
+// ROS camera_info YAML (camera_calibration_parsers' format): plumb_bob distortion, identity
+// rectification, projection [K | 0]. Whole or not at all.
+Status WriteCameraInfoYaml(const CameraModel& cam, const std::string& camera_name,
+                           const std::string& path);
 
 }  // namespace kincal::vision
