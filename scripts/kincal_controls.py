@@ -18,6 +18,10 @@ the publisher's clock when none is given), in microseconds on any clock of the r
 on receipt and, with `robot.control_stamp: mapped` (its default), maps the robot's stamps
 onto its receive clock, so transport jitter does not reach the filter.
 
+`--listen` does the reverse: it prints the controls_t messages it receives on `--channel`
+as the same CSV lines (t = sender_utime in seconds), to watch what a robot sends, or to
+chain two channels (`kincal_controls.py --listen --channel A ... | kincal_controls.py ...`).
+
 A line that cannot be read (wrong number of fields, not a number, not finite, time going
 back) is skipped with a message naming the line, and counted; the count is printed at the
 end. The exit status is 1 when any line was skipped.
@@ -119,13 +123,47 @@ def pipe(args, stdin=sys.stdin):
     return 1 if skipped else 0
 
 
+def listen(args, out=sys.stdout):
+    """controls_t on args.channel -> `t,<names>` lines; ends after args.idle_timeout s
+    without a message (0: never)."""
+    import lcm
+    import select
+
+    controls_t = import_types(args.lcm_types)
+    names = CONTROL_NAMES[args.model]
+    lc = lcm.LCM(args.url) if args.url else lcm.LCM()
+    print("t," + ",".join(names), file=out, flush=True)
+
+    def handle(channel, data):
+        m = controls_t.decode(data)
+        by_name = dict(zip(m.names, m.values))
+        if m.model != args.model or sorted(by_name) != sorted(names):
+            print(f"kincal_controls: {channel}: a {m.model} message with {list(m.names)} ignored", file=sys.stderr)
+            return
+        t = (m.sender_utime or m.utime) * 1e-6
+        print(f"{t:.6f}," + ",".join(repr(by_name[n]) for n in names), file=out, flush=True)
+
+    lc.subscribe(args.channel, handle)
+    while True:
+        ready, _, _ = select.select([lc.fileno()], [], [], args.idle_timeout or None)
+        if not ready:
+            return 0
+        lc.handle()
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", required=True, choices=sorted(CONTROL_NAMES))
     ap.add_argument("--url", default="", help="LCM URL (default: LCM's own default)")
     ap.add_argument("--channel", default="KINCAL_CONTROLS")
     ap.add_argument("--lcm-types", help="folder holding the kincal LCM Python package")
-    return pipe(ap.parse_args())
+    ap.add_argument("--listen", action="store_true", help="print received controls_t as CSV lines instead")
+    ap.add_argument("--idle-timeout", type=float, default=0.0, help="--listen: stop after this many s without a message")
+    args = ap.parse_args()
+    try:
+        return listen(args) if args.listen else pipe(args)
+    except BrokenPipeError:
+        return 0
 
 
 if __name__ == "__main__":

@@ -200,6 +200,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("chunk_s", &c.sim.chunk_s);
     s.Get("noise_grey", &c.sim.noise_grey);
     s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
+    s.Get("controls_channel", &c.sim.controls_channel);
     s.Get("reflection_prob", &c.sim.reflection_prob);
     s.Get("occlusion_prob", &c.sim.occlusion_prob);
     s.Get("seed", &c.sim.seed);

@@ -62,7 +62,11 @@ bool SimOptions::IsValid(std::string* error) const {
          Expect(chunk_s >= 1.0 && chunk_s <= 3600.0, "sim.chunk_s must be in [1, 3600] s", error) &&
          Expect(reflection_prob >= 0 && reflection_prob <= 1 && occlusion_prob >= 0 &&
                     occlusion_prob <= 1,
-                "sim.reflection_prob and occlusion_prob must be in [0, 1]", error);
+                "sim.reflection_prob and occlusion_prob must be in [0, 1]", error) &&
+         Expect(controls_channel.size() < 64,
+                "sim.controls_channel must be at most 63 characters (empty: "
+                "lcm.controls_channel)",
+                error);
 }
 
 bool ReplayOptions::IsValid(std::string* error) const {

@@ -47,8 +47,11 @@ std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup
                                         ControlIntake controls, NetworkPublish publish) {
   switch (c.source) {
     case SourceKind::kSim:
-      return MakeSimSource({c.sim, c.robot.model, c.lcm.controls_channel, c.file}, v,
-                           std::move(controls), std::move(publish));
+      return MakeSimSource(
+          {c.sim, c.robot.model,
+           c.sim.controls_channel.empty() ? c.lcm.controls_channel : c.sim.controls_channel,
+           c.file},
+          v, std::move(controls), std::move(publish));
     case SourceKind::kReplay:
       return MakeReplaySource(c.replay, c.lcm, std::move(controls));
     case SourceKind::kV4l2:

@@ -63,5 +63,14 @@ class Pipe(unittest.TestCase):
         self.assertIn("2 messages sent on KINCAL_CONTROLS, 4 lines skipped", err)
 
 
+class DocsExample(unittest.TestCase):
+    def test_the_cpp_example_in_the_docs_is_the_one_built_and_tested(self):
+        root = os.path.join(HERE, "..", "..")
+        with open(os.path.join(root, "apps", "examples", "controls_publisher.cc")) as f:
+            code = f.read()
+        with open(os.path.join(root, "docs", "ros.md")) as f:
+            self.assertIn("```cpp\n" + code + "```", f.read())
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -85,6 +85,10 @@ struct SimOptions {
   // false: the simulated robot hands its controls to the filter directly (and publishes
   // them); true: they reach the filter only through LCM, like a real robot's.
   bool controls_via_lcm = false;
+  // Where the simulated robot publishes its commands; empty: lcm.controls_channel. Another
+  // channel stands for a robot whose driver forwards them to kincald (a bridge such as
+  // scripts/kincal_controls.py; tests of that path).
+  std::string controls_channel;
   // Measurement faults, per frame: a marker-like reflection near the target, one marker
   // hidden (a wrong marker count).
   double reflection_prob = 0.0;
