@@ -36,13 +36,13 @@ std::string Interpreter() {
   return fs::exists(venv) ? venv.string() : std::string("python3");
 }
 
-// The installed copy beside the other scripts, else the source tree's.
+// The installed copy beside the other scripts (PREFIX/bin/kincal ->
+// PREFIX/share/kincal/scripts), else the source tree's (a build tree's kincal).
 std::string Script() {
   if (std::string p = FromEnv("KINCAL_IMPORT_SCRIPT"); !p.empty()) return p;
-  const fs::path installed = fs::path(KINCAL_INSTALL_DATADIR) / "scripts" / "kincal_import.py";
-  if (fs::exists(installed) && !ExecutableDir().string().starts_with(KINCAL_BINARY_DIR)) {
-    return installed.string();
-  }
+  const fs::path installed =
+      ExecutableDir() / ".." / "share" / "kincal" / "scripts" / "kincal_import.py";
+  if (fs::exists(installed)) return installed.lexically_normal().string();
   return (fs::path(KINCAL_SOURCE_DIR) / "scripts" / "kincal_import.py").string();
 }
 

@@ -11,7 +11,9 @@ cmake --install "$build" --prefix "$prefix" >/dev/null
 for f in bin/kincal bin/kincald lib/libkincal.so lib/systemd/system/kincald.service \
          share/kincal/config/kincald_sim.yaml share/kincal/config/kincald_v4l2.yaml \
          share/kincal/lcm/params_t.lcm include/kincal/daemon/daemon.h include/kincal/lcmtypes/kincal/params_t.hpp \
-         lib/python3/dist-packages/kincal/params_t.py share/kincal/scripts/kincal_watch.py; do
+         lib/python3/dist-packages/kincal/params_t.py share/kincal/scripts/kincal_watch.py \
+         share/kincal/scripts/kincal_import.py share/kincal/scripts/kincal_controls.py \
+         share/kincal/python/kincal/controls_t.py; do
   [ -e "$prefix/$f" ] || { echo "install_check: missing $f"; exit 1; }
 done
 grep -q "ExecStart=.*/kincald --config" "$prefix/lib/systemd/system/kincald.service"
@@ -20,4 +22,7 @@ bin/kincald --fast --duration 5 --lcm-url memq:// --checkpoint "$prefix/ck.json"
 grep -q "^  r_l = " "$prefix/out.txt"
 bin/kincal export --checkpoint "$prefix/ck.json" | grep -q "^  d: {value: 0.14"
 PYTHONPATH=$prefix/lib/python3/dist-packages "$python" -c "from kincal import params_t, pose_t, health_t; print('python module ok')"
+# kincal import runs the installed script, which finds the installed LCM types.
+KINCAL_PYTHON=$python bin/kincal import --help | grep -q "usage: kincal import"
+KINCAL_PYTHON=$python "$python" share/kincal/scripts/kincal_controls.py --help | grep -q -- "--listen"
 echo "install_check: ok"
