@@ -137,6 +137,45 @@ class Listing(Fixture):
         self.assertIn("--poses /mocap/robot/pose", r.stdout)
 
 
+class LargeBag(Fixture):
+    """Streaming: importing five times the frames takes no more memory."""
+
+    def write_frames(self, path, n):
+        import numpy as np
+
+        rng = np.random.default_rng(1)
+        frame = rng.integers(0, 255, 320 * 240, dtype=np.uint8)
+        with ros_bags.BagWriter(path, "ros1") as w:
+            for i in range(n):
+                h, ns = ros_bags.header(i / 30.0, "camera")
+                msg = ros_bags.T["sensor_msgs/msg/Image"](
+                    header=h, height=240, width=320, encoding="mono8", is_bigendian=0, step=320, data=frame)
+                w.write("/image", "sensor_msgs/msg/Image", msg, ns)
+
+    def peak_rss_mb(self, bag):
+        import resource
+
+        out = self.path("frames.lcm")
+        r = subprocess.run(
+            [sys.executable, "-c",
+             "import resource, subprocess, sys; subprocess.run(sys.argv[1:], check=True, capture_output=True); "
+             "print(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss)",
+             KINCAL, "import", bag, "--out", out, "--images", "/image"],
+            capture_output=True, text=True, timeout=600)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        os.unlink(out)
+        del resource
+        return int(r.stdout.strip()) / 1024.0
+
+    def test_memory_is_flat_in_the_bag_size(self):
+        small, large = self.path("small.bag"), self.path("large.bag")
+        self.write_frames(small, 150)
+        self.write_frames(large, 750)  # 58 MB of frames
+        rss_small = self.peak_rss_mb(small)
+        rss_large = self.peak_rss_mb(large)
+        self.assertLess(rss_large, rss_small + 20.0, f"peak RSS {rss_small:.0f} MB -> {rss_large:.0f} MB")
+
+
 class BadBags(Fixture):
     """Each bad bag exits non-zero, names the topic and the message, and writes nothing."""
 
