@@ -72,7 +72,7 @@ def open_bag(path):
 
 
 def topics_of(reader):
-    """{topic: (msgtype, count, first_ns, last_ns)} over all connections."""
+    """{topic: (msgtype, message count)} over all connections."""
     out = {}
     for c in reader.connections:
         t, n = c.topic, c.msgcount
@@ -155,8 +155,8 @@ class TiltStats:
 
 
 def pose_of(msg, typ, args, where, tilt):
-    """(x, y, theta, cov3x3 or None, header stamp) or None when the message holds no pose
-    for the requested frame (a tf message about other frames)."""
+    """(x, y, theta, cov3x3 or None) or None when the message holds no pose for the
+    requested frame (a tf message about other frames)."""
     cov = None
     if typ == "tf2_msgs/msg/TFMessage":
         for tr in msg.transforms:
@@ -172,10 +172,10 @@ def pose_of(msg, typ, args, where, tilt):
         c = [float(v) for v in msg.pose.covariance]
         cov = [c[i * 6 + k] for i in (0, 1, 5) for k in (0, 1, 5)]
     theta = planar(q, where, tilt)
-    return float(p.x), float(p.y), theta, cov, stamp_ns(msg)
+    return float(p.x), float(p.y), theta, cov
 
 
-def controls_of(msg, typ, args, where, joint_index):
+def controls_of(msg, typ, args, where):
     """The model's control values, in the model's order."""
     if typ == "sensor_msgs/msg/JointState":
         names = list(msg.name)
@@ -442,7 +442,7 @@ def one(s, msg, receive_ns, args, writer, tilt, where, i):
         got = pose_of(msg, s.type, args, where, tilt)
         if got is None:
             return
-        x, y, theta, cov, _ = got
+        x, y, theta, cov = got
         carrier = msg
         if s.type == "tf2_msgs/msg/TFMessage":
             carrier = next(t for t in msg.transforms if t.child_frame_id.lstrip("/") == args.tf_frame.lstrip("/"))
@@ -452,7 +452,7 @@ def one(s, msg, receive_ns, args, writer, tilt, where, i):
                 fail(f"{where}: pose is not finite")
         writer.pose(utime, x, y, theta, cov)
     elif s.role == "controls":
-        values = controls_of(msg, s.type, args, where, None)
+        values = controls_of(msg, s.type, args, where)
         if not all(math.isfinite(v) for v in values):
             fail(f"{where}: controls are not finite ({values})")
         utime = s.stamp(msg, receive_ns, args.stamps, i) // 1000
