@@ -29,7 +29,6 @@ end. The exit status is 1 when any line was skipped.
 
 import argparse
 import math
-import os
 import sys
 import time
 
@@ -42,12 +41,9 @@ CONTROL_NAMES = {
 
 
 def import_types(path=None):
-    here = os.path.dirname(os.path.abspath(__file__))
-    for c in (path, os.environ.get("KINCAL_LCM_TYPES"), os.path.join(here, "..", "build", "lcmgen", "python"),
-              os.path.join(here, "..", "python")):
-        if c and os.path.isdir(os.path.join(c, "kincal")):
-            sys.path.insert(0, c)
-            break
+    from kincal_lcm_types import use_lcm_types
+
+    use_lcm_types(path)
     from kincal import controls_t
 
     return controls_t

@@ -155,8 +155,8 @@ class TiltStats:
 
 
 def pose_of(msg, typ, args, where, tilt):
-    """(x, y, theta, cov3x3 or None) or None when the message holds no pose for the
-    requested frame (a tf message about other frames)."""
+    """(x, y, theta, cov3x3 or None, the message carrying the stamp) or None when the
+    message holds no pose for the requested frame (a tf message about other frames)."""
     cov = None
     if typ == "tf2_msgs/msg/TFMessage":
         for tr in msg.transforms:
@@ -172,7 +172,7 @@ def pose_of(msg, typ, args, where, tilt):
         c = [float(v) for v in msg.pose.covariance]
         cov = [c[i * 6 + k] for i in (0, 1, 5) for k in (0, 1, 5)]
     theta = planar(q, where, tilt)
-    return float(p.x), float(p.y), theta, cov
+    return float(p.x), float(p.y), theta, cov, msg
 
 
 def controls_of(msg, typ, args, where):
@@ -295,13 +295,9 @@ def write_atomically(path, data):
 
 
 def import_types(path):
-    here = os.path.dirname(os.path.abspath(__file__))
-    candidates = [path, os.environ.get("KINCAL_LCM_TYPES")]
-    candidates += [os.path.join(here, "..", "build", "lcmgen", "python"), os.path.join(here, "..", "python")]
-    for c in candidates:
-        if c and os.path.isdir(os.path.join(c, "kincal")):
-            sys.path.insert(0, c)
-            break
+    from kincal_lcm_types import use_lcm_types
+
+    use_lcm_types(path)
     try:
         from kincal import controls_t, frame_t, pose_t  # noqa: F401
     except ImportError as e:
@@ -442,10 +438,7 @@ def one(s, msg, receive_ns, args, writer, tilt, where, i):
         got = pose_of(msg, s.type, args, where, tilt)
         if got is None:
             return
-        x, y, theta, cov = got
-        carrier = msg
-        if s.type == "tf2_msgs/msg/TFMessage":
-            carrier = next(t for t in msg.transforms if t.child_frame_id.lstrip("/") == args.tf_frame.lstrip("/"))
+        x, y, theta, cov, carrier = got  # a tf message's stamp is its transform's
         utime = s.stamp(carrier, receive_ns, args.stamps, i) // 1000
         for v in (x, y, theta):
             if not math.isfinite(v):

@@ -24,13 +24,9 @@ import time
 
 
 def import_types(path):
-    candidates = [path] if path else []
-    here = os.path.dirname(os.path.abspath(__file__))
-    candidates.append(os.path.join(here, "..", "build", "lcmgen", "python"))
-    for c in candidates:
-        if c and os.path.isdir(os.path.join(c, "kincal")):
-            sys.path.insert(0, c)
-            break
+    from kincal_lcm_types import use_lcm_types
+
+    use_lcm_types(path)
     try:
         from kincal import health_t, model_check_t, params_t  # noqa: F401
     except ImportError as e:

@@ -8,17 +8,15 @@ filter needed below.
 """
 import argparse
 import math
-import os
 import sys
 
 import lcm
 
 
 def import_types(path):
-    here = os.path.dirname(os.path.abspath(__file__))
-    for c in [path, os.path.join(here, "..", "build", "lcmgen", "python")]:
-        if c and os.path.isdir(c):
-            sys.path.insert(0, c)
+    from kincal_lcm_types import use_lcm_types
+
+    use_lcm_types(path)
     from kincal import model_check_t, params_t  # noqa: E402
     return params_t, model_check_t
 
