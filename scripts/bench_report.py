@@ -241,6 +241,15 @@ def users_sections(wall, times, counters, counter):
                 f"| frames dropped | {counter(n, 'frames_dropped'):.0f} | 0 |",
                 "", "config/kincald_sim_lag.yaml at `--speed 1` for 100 s: the simulated robot with a "
                 "hidden lag; the search runs in its worker thread while frames flow."]
+    imp = [n for n in wall if n.startswith("BM_ImportBag")]
+    if imp:
+        n = imp[0]
+        out += ["", "## kincal import (a ROS bag to an LCM log)", "",
+                "| bag | wall s | messages/s |", "|---|---|---|",
+                f"| ROS 2 mcap, diffdrive, 300 s: JointState 50 Hz + PoseStamped 30 Hz (24,000 messages) | "
+                f"{wall[n] / 1e6:.2f} | {counter(n, 'messages_per_s'):,.0f} |",
+                "", "The whole command, Python's start-up included (`kincal` runs "
+                "scripts/kincal_import.py with the venv's Python)."]
     return out
 
 
