@@ -240,6 +240,29 @@ PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& low
   return out;
 }
 
+PlanarPose FloorPoseFromLoweAtHeight(const FloorExtrinsics& floor, const LoweResult& lowe,
+                                     double target_height_m) {
+  PlanarPose out = FloorPoseFromLowe(floor, lowe);
+  const Eigen::Matrix3d Rfc = floor.R_cf.transpose();
+  const Eigen::Vector3d centre = -Rfc * floor.t_cf;  // the camera in floor coordinates
+  const Eigen::Vector3d d = Rfc * lowe.pose.t;       // line of sight to the target's origin
+  const double drop = target_height_m - centre.z();
+  if (!(d.z() < 0.0 && drop < 0.0)) {
+    out.ok = false;
+    return out;
+  }
+  const double s = drop / d.z();
+  out.xytheta.head<2>() = centre.head<2>() + s * d.head<2>();
+  // d(xy)/d(d) = s [I | -d_xy / d_z]; d(d)/d(t) = Rfc.
+  Eigen::Matrix<double, 2, 3> dxy_dd;
+  dxy_dd << s, 0.0, -s * d.x() / d.z(), 0.0, s, -s * d.y() / d.z();
+  Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
+  J.block<2, 3>(0, 0) = dxy_dd * Rfc;
+  J.block<1, 3>(2, 3) = Rfc.row(2);
+  out.covariance = J * lowe.covariance * J.transpose();
+  return out;
+}
+
 Pose3 CameraPoseOnFloor(const FloorExtrinsics& floor, const Eigen::Vector3d& xytheta,
                         double target_height_m) {
   Pose3 p;

@@ -76,6 +76,13 @@ LoweResult LevelLowePose(const FloorExtrinsics& floor, std::span<const Eigen::Ve
 // D; theta moves with the floor-z component of the rotation increment). ok and rms_px
 // are copied from the solve.
 PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& lowe);
+// The same, with the target's position taken where the line of sight to its solved
+// origin meets the plane `target_height_m` above the floor, instead of at its solved
+// depth: a known height replaces the least certain coordinate of a small target's pose,
+// and with it the depth's bias (a scale of every position about the camera's nadir).
+// Not ok when the line of sight does not descend to that plane.
+PlanarPose FloorPoseFromLoweAtHeight(const FloorExtrinsics& floor, const LoweResult& lowe,
+                                     double target_height_m);
 // The floor (x, y, theta) of a target pose alone.
 Eigen::Vector3d FloorPoseOf(const FloorExtrinsics& floor, const Pose3& pose);
 
