@@ -91,7 +91,9 @@ void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p)
   } else {
     const auto lowe = vision::LevelLowePose(vis_.floor, o, n, pose3, vis_.camera.fx, opt_.sigma_px);
     if (!lowe.ok || !(lowe.rms_px <= opt_.max_rms_px)) return;
-    const vision::PlanarPose r = vision::FloorPoseFromLowe(vis_.floor, lowe);
+    const vision::PlanarPose r =
+        vision::FloorPoseFromLoweAtHeight(vis_.floor, lowe, vis_.target_height_m);
+    if (!r.ok) return;
     p->xytheta = r.xytheta;
     p->covariance = r.covariance;
     p->rms_px = r.rms_px;
