@@ -28,5 +28,6 @@ Command AddDetect(CLI::App& app);
 Command AddFloorcal(CLI::App& app);
 Command AddExport(CLI::App& app);
 Command AddImport(CLI::App& app);
+Command AddPlan(CLI::App& app);
 
 }  // namespace kincal::app

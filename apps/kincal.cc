@@ -61,6 +61,8 @@ int main(int argc, char** argv) {
   commands[exp] = kincal::app::AddExport(*exp);
   auto* imp = app.add_subcommand("import", "a ROS 1 or ROS 2 bag to a kincal LCM log (rosbags)");
   commands[imp] = kincal::app::AddImport(*imp);
+  auto* plan = app.add_subcommand("plan", "how to drive a robot to calibrate it fastest");
+  commands[plan] = kincal::app::AddPlan(*plan);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

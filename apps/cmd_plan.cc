@@ -1,0 +1,246 @@
+// kincal plan: how to drive a robot to calibrate it fastest, against the usual motions.
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "commands.h"
+#include "kincal/analysis/analyze.h"
+#include "kincal/analysis/option_lists.h"
+#include "kincal/daemon/checkpoint.h"
+#include "kincal/plan/plan_output.h"
+#include "kincal/plan/planner.h"
+#include "kincal/scenario.h"
+#include "kincal/vision/camera.h"
+#include "kincal/vision/setup_files.h"
+#include "python_scripts.h"
+
+namespace kincal::app {
+namespace {
+
+struct PlanArgs {
+  std::string model, effects, init, checkpoint, report, camera, floor, target, arena, pose_sigma,
+      limits, targets, care, criterion = "targets", out;
+  double pose_rate_hz = 15.0, duration_s = 60.0, rate_hz = 20.0, segment_s = 0.5,
+         target_height_m = 0.1, margin_px = 10.0;
+  bool publish = false, no_plot = false;
+  std::string channel = "KINCAL_CONTROLS";
+};
+
+std::vector<double> ParseNumbers(const std::string& text, size_t n, const char* what) {
+  std::vector<double> v;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) {
+      throw std::runtime_error(std::string(what) + ": '" + item + "' is not a number");
+    }
+    v.push_back(x);
+  }
+  if (v.size() != n) {
+    throw std::runtime_error(std::string(what) + ": " + std::to_string(n) +
+                             " comma-separated numbers expected, got '" + text + "'");
+  }
+  return v;
+}
+
+std::map<std::string, double> ParseMap(const std::string& text, const char* what) {
+  std::map<std::string, double> m;
+  if (const Status s = ParseInitList(text, &m); !s.ok()) {
+    throw std::runtime_error(std::string(what) + ": " + s.message());
+  }
+  return m;
+}
+
+// The design point and prior: --init values over the model's defaults (prior: the
+// defaults' sigma), or a checkpoint's or report's estimate and covariance.
+void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen::MatrixXd* c) {
+  const int n = sys.num_params();
+  *p = ParamsFrom(sys, ParseMap(a.init, "--init"), "--init");
+  *c = Eigen::MatrixXd::Zero(n, n);
+  for (int i = 0; i < n; ++i)
+    c->diagonal()[i] = std::pow(sys.params()[static_cast<size_t>(i)].default_sigma, 2);
+  std::vector<std::string> names;
+  std::vector<double> values;
+  Eigen::MatrixXd cov;
+  std::string source;
+  if (!a.checkpoint.empty()) {
+    const daemon::Checkpoint ck = daemon::ReadCheckpoint(a.checkpoint);
+    names = ck.names, values = ck.values, cov = ck.covariance, source = a.checkpoint;
+  } else if (!a.report.empty()) {
+    ReportEstimate r;
+    if (const Status s = ReadReportEstimate(a.report, &r); !s.ok())
+      throw std::runtime_error(s.message());
+    names = r.names, values = r.values, source = a.report;
+    cov = Eigen::MatrixXd::Zero(static_cast<int>(names.size()), static_cast<int>(names.size()));
+    for (size_t i = 0; i < r.sigmas.size(); ++i)
+      cov(static_cast<int>(i), static_cast<int>(i)) = r.sigmas[i] * r.sigmas[i];
+  }
+  std::vector<int> at(names.size(), -1);
+  for (size_t k = 0; k < names.size(); ++k) {
+    at[k] = sys.ParamIndex(names[k]);
+    if (at[k] < 0) {
+      throw std::runtime_error(source + ": parameter '" + names[k] + "' is not one of the " +
+                               std::string(sys.model().name()) + " system's");
+    }
+    (*p)[at[k]] = values[k];
+  }
+  for (size_t k = 0; k < names.size(); ++k) {
+    for (size_t l = 0; l < names.size(); ++l)
+      (*c)(at[k], at[l]) = cov(static_cast<int>(k), static_cast<int>(l));
+  }
+}
+
+std::unique_ptr<Workspace> WorkspaceFrom(const PlanArgs& a) {
+  if (!a.arena.empty()) {
+    const auto v = ParseNumbers(a.arena, 4, "--arena X0,Y0,X1,Y1");
+    if (!(v[0] < v[2] && v[1] < v[3]))
+      throw std::runtime_error("--arena: X0 < X1 and Y0 < Y1 expected");
+    return MakeArena(v[0], v[1], v[2], v[3]);
+  }
+  if (a.camera.empty() || a.floor.empty()) {
+    throw std::runtime_error("a workspace is needed: --arena X0,Y0,X1,Y1, or --camera and --floor");
+  }
+  return MakeCameraView(vision::ReadCameraYaml(a.camera), vision::ReadFloorYaml(a.floor),
+                        vision::ReadTargetLayoutYaml(a.target), a.target_height_m, a.margin_px);
+}
+
+PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
+  PlanOptions o;
+  o.duration_s = a.duration_s;
+  o.control_rate_hz = a.rate_hz;
+  o.segment_s = a.segment_s;
+  o.info.pose_rate_hz = a.pose_rate_hz;
+  if (!a.pose_sigma.empty()) {
+    const auto s = ParseNumbers(a.pose_sigma, 3, "--pose-sigma SX,SY,STHETA");
+    o.info.pose_sigma = Eigen::Vector3d(s[0], s[1], s[2]);
+  }
+  const auto lim = ParseMap(a.limits, "--limits");
+  const int nc = sys.num_controls();
+  o.max_abs.assign(static_cast<size_t>(nc), 0.0);
+  o.max_accel.assign(static_cast<size_t>(nc), 0.0);
+  for (const auto& [k, v] : lim) {
+    const int c = sys.model().ControlIndex(k);
+    if (c >= 0) {
+      o.max_abs[static_cast<size_t>(c)] = v;
+    } else if (k == "accel") {
+      for (double& x : o.max_accel) x = v;
+    } else if (k.starts_with("accel_") && sys.model().ControlIndex(k.substr(6)) >= 0) {
+      o.max_accel[static_cast<size_t>(sys.model().ControlIndex(k.substr(6)))] = v;
+    } else if (k == "curvature") {
+      o.max_curvature = v;
+    } else {
+      throw std::runtime_error("--limits: '" + k + "' is not a control of " +
+                               std::string(sys.model().name()) +
+                               ", accel, accel_<control> or curvature");
+    }
+  }
+  if (a.criterion == "a") {
+    o.criterion = DesignCriterion::kA;
+  } else if (a.criterion == "d") {
+    o.criterion = DesignCriterion::kD;
+  } else if (a.criterion == "targets") {
+    o.criterion = DesignCriterion::kTargets;
+  } else {
+    throw std::runtime_error("--criterion: a, d or targets expected, not '" + a.criterion + "'");
+  }
+  const auto targets = ParseMap(a.targets, "--targets");
+  if (!targets.empty()) o.targets = Eigen::VectorXd::Zero(sys.num_params());
+  for (const auto& [k, v] : targets) {
+    const int i = sys.ParamIndex(k);
+    if (i < 0 || !(v > 0.0))
+      throw std::runtime_error("--targets: '" + k +
+                               "' is not a parameter of this system, or its sigma is not > 0");
+    o.targets[i] = v;
+    o.care.push_back(i);
+  }
+  std::string error;
+  if (!o.IsValid(sys, &error)) throw std::runtime_error(error);
+  return o;
+}
+
+int Run(const PlanArgs& a) {
+  if (!a.checkpoint.empty() && !a.report.empty()) {
+    throw std::runtime_error("--checkpoint and --report: one prior at most");
+  }
+  if (!a.arena.empty() && (!a.camera.empty() || !a.floor.empty())) {
+    throw std::runtime_error("--arena, or --camera with --floor: one workspace");
+  }
+  std::vector<std::string> effects;
+  if (const Status s = ParseEffectList(a.effects, &effects); !s.ok())
+    throw std::runtime_error("--effects: " + s.message());
+  std::unique_ptr<System> sys;
+  if (const Status s = MakeSystem(a.model, effects, {}, &sys); !s.ok())
+    throw std::runtime_error(s.message());
+  Eigen::VectorXd p;
+  Eigen::MatrixXd prior;
+  DesignPoint(*sys, a, &p, &prior);
+  const auto ws = WorkspaceFrom(a);
+  const PlanOptions o = OptionsFrom(*sys, a);
+  std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";
+  Motion plan;
+  if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan); !s.ok())
+    throw std::runtime_error(s.message());
+  EvaluateMotion(*sys, p, prior, *ws, o, kCurveStepS, &plan);
+  std::vector<Motion> usual = UsualMotions(*sys, p, prior, *ws, o);
+  PrintPlanSummary(*sys, o, plan, usual, std::cout);
+  if (const Status s = WritePlanFiles(a.out, *sys, p, prior, o, plan, usual); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
+  if (!a.no_plot) {
+    SetLcmTypesPath();
+    const std::string err = RunAndWait({PythonInterpreter(), PythonScript("plot_plan.py", nullptr),
+                                        a.out + "/plan.json", a.out + "/plan.png"});
+    if (!err.empty()) {
+      throw std::runtime_error("plan.png: " + err +
+                               " (plan.csv and plan.json are written; --no-plot skips the plot)");
+    }
+  }
+  if (a.publish) {
+    if (const Status s = PublishPlan(*sys, plan, a.channel); !s.ok())
+      throw std::runtime_error(s.message());
+  }
+  return 0;
+}
+
+}  // namespace
+
+Command AddPlan(CLI::App& app) {
+  auto a = std::make_shared<PlanArgs>();
+  app.add_option("--model", a->model, "kinematic model")->required();
+  app.add_option("--effects", a->effects, "declared effects, e.g. actuator_lag,time_offset");
+  app.add_option("--init", a->init, "design point, name=value,... (prior: the generic sigma)");
+  app.add_option("--checkpoint", a->checkpoint,
+                 "a kincald checkpoint: design point and covariance");
+  app.add_option("--report", a->report, "an analyze report.json: design point and sigma");
+  app.add_option("--camera", a->camera, "camera intrinsics (OpenCV or ROS camera_info YAML)");
+  app.add_option("--floor", a->floor, "floor extrinsics (kincal floorcal)");
+  app.add_option("--target", a->target, "target layout YAML (default: the thesis plate)");
+  app.add_option("--target-height", a->target_height_m, "target plane above the floor, m");
+  app.add_option("--margin", a->margin_px, "markers stay this far inside the frame, px");
+  app.add_option("--arena", a->arena, "workspace X0,Y0,X1,Y1 on the floor, m");
+  app.add_option("--pose-sigma", a->pose_sigma, "pose noise SX,SY,STHETA (m, m, rad)");
+  app.add_option("--pose-rate", a->pose_rate_hz, "poses per second");
+  app.add_option("--duration", a->duration_s, "driving time, s");
+  app.add_option("--limits", a->limits,
+                 "<control>=max|..|, accel=.. (units/s), accel_<control>=.., curvature=.. (1/m)")
+      ->required();
+  app.add_option("--rate", a->rate_hz, "control samples per second");
+  app.add_option("--segment", a->segment_s, "seconds per planning decision");
+  app.add_option("--targets", a->targets,
+                 "target sigma, name=value,...: the parameters scored and timed (default: all, "
+                 "scaled by their prior sigma)");
+  app.add_option("--criterion", a->criterion,
+                 "targets (the default: sum of squared scaled variances), a (their sum) or d "
+                 "(log det); scaled by --targets, else by the prior sigma");
+  app.add_option("--out", a->out, "output directory (plan.csv, plan.json, plan.png)")->required();
+  app.add_flag("--no-plot", a->no_plot, "skip plan.png");
+  app.add_flag("--publish", a->publish, "play the plan as kincal.controls_t on LCM, in real time");
+  app.add_option("--channel", a->channel, "LCM channel for --publish");
+  return [a] { return Run(*a); };
+}
+
+}  // namespace kincal::app

@@ -1,0 +1,95 @@
+// kincal plan: an open-loop control sequence that calibrates a robot fastest, and the
+// motions people use today evaluated on the same footing.
+//
+// The plan is built one segment at a time (greedy sequential design): from the motion so
+// far, every candidate control (a grid over each channel's limits) is driven for one
+// segment, with the channels slewing at their acceleration limits, and the candidate
+// whose predicted posterior (DesignInformation) scores best is kept. A candidate is
+// allowed only if the target stays in the workspace along it and along a stop after it,
+// for every robot within the k-sigma ellipsoid of the prior: the robots at +-k sigma
+// along each principal axis are driven as they are, and the ellipsoid between them is
+// checked through the spread of poses they imply (to first order).
+//
+// Score (the parameters `care`, each scaled by its target sigma, or its prior sigma when
+// it has none): A-optimal, the sum of the scaled variances; D-optimal, the log
+// determinant of the scaled covariance; targets (the default), the sum of the scaled
+// variances squared: the time to every target is the slowest parameter's, and squaring
+// makes the parameter farthest from its target count most (on the reference case it
+// reaches the targets a tenth sooner than A-optimal).
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "kincal/control_signal.h"
+#include "kincal/plan/design_information.h"
+#include "kincal/plan/workspace.h"
+#include "kincal/status.h"
+#include "kincal/system.h"
+
+namespace kincal {
+
+enum class DesignCriterion { kA, kD, kTargets };
+
+struct PlanOptions {
+  double duration_s = 60.0;
+  double control_rate_hz = 20.0;  // samples of the output sequence per second
+  double segment_s = 0.5;         // one decision per segment
+  std::vector<double> max_abs;    // per control channel, > 0
+  std::vector<double> max_accel;  // per channel, units per second; 0 or empty: none
+  double max_curvature = 0.0;     // |omega / v| (1/m) at the design point; 0: none
+  int levels = 5;                 // grid levels per channel (odd, >= 3)
+  double prior_sigmas = 3.0;      // the robots that must stay in view
+  DesignCriterion criterion = DesignCriterion::kTargets;
+  std::vector<int> care;    // parameter indices scored; empty: all
+  Eigen::VectorXd targets;  // target sigma per parameter; 0 or empty: none
+  DesignInformationOptions info;
+  bool IsValid(const System& sys, std::string* error) const;
+};
+
+// Predicted sigma of every parameter against driving time.
+struct SigmaCurve {
+  std::vector<double> t_s;
+  std::vector<Eigen::VectorXd> sigma;
+  // First time every cared-for target is met; when the curve never meets them,
+  // extrapolated from its end by sigma ~ t^-1/2 and `extrapolated` set. NaN without targets.
+  double time_to_target_s = 0.0;
+  bool extrapolated = false;
+};
+
+struct Motion {
+  std::string name;
+  ControlSignal controls;                // from t = 0 on the signal's origin
+  std::vector<double> segment_starts_s;  // a new free start pose at each (at least 0)
+  SigmaCurve curve;
+  std::vector<Eigen::Vector3d> path;  // measured target pose at the curve's times (nominal)
+  bool stays_in = true;               // at the design point
+  double left_at_s = -1.0;            // first time it left the workspace (nominal), or -1
+};
+
+// The plan. `params` and `prior_cov` are the design point and its uncertainty.
+Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
+                  const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                  Motion* plan);
+
+// The usual calibration motions on the same time budget, speeds and workspace: a square,
+// a circle each way, figure-eights, and the thesis's 99 constant-control runs (each a
+// separate segment). Each is evaluated like the plan.
+std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& params,
+                                 const Eigen::MatrixXd& prior_cov, const Workspace& ws,
+                                 const PlanOptions& o);
+
+// Resolution of the sigma curves `kincal plan` reports (s).
+inline constexpr double kCurveStepS = 0.25;
+
+// Evaluates a motion's sigma curve (every `step_s`) and whether it stays in.
+void EvaluateMotion(const System& sys, const Eigen::VectorXd& params,
+                    const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                    double step_s, Motion* m);
+
+// Scaled score of a covariance (smaller is better).
+double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
+                   const PlanOptions& o);
+
+}  // namespace kincal

@@ -1,0 +1,143 @@
+#include "kincal/plan/plan_output.h"
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <kincal/controls_t.hpp>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "kincal/io/output_file.h"
+
+namespace kincal {
+namespace {
+
+nlohmann::json CurveJson(const Motion& m) {
+  nlohmann::json j;
+  j["name"] = m.name;
+  j["t_s"] = m.curve.t_s;
+  std::vector<std::vector<double>> sigma;
+  for (const auto& s : m.curve.sigma) sigma.emplace_back(s.data(), s.data() + s.size());
+  j["sigma"] = sigma;
+  j["time_to_target_s"] = std::isfinite(m.curve.time_to_target_s)
+                              ? nlohmann::json(m.curve.time_to_target_s)
+                              : nlohmann::json();
+  j["extrapolated"] = m.curve.extrapolated;
+  j["stays_in"] = m.stays_in;
+  j["left_at_s"] = m.left_at_s;
+  j["segments"] = m.segment_starts_s.size();
+  std::vector<std::vector<double>> path;
+  for (const auto& q : m.path) path.push_back({q.x(), q.y(), q.z()});
+  j["path"] = path;
+  return j;
+}
+
+}  // namespace
+
+std::string ControlsCsv(const System& sys, const ControlSignal& u) {
+  std::ostringstream out;
+  out << "t";
+  for (const auto& c : sys.model().controls()) out << "," << c.name;
+  out << "\n" << std::setprecision(10);
+  for (size_t i = 0; i < u.size(); ++i) {
+    out << u.TimeAt(static_cast<int>(i));
+    for (int c = 0; c < sys.num_controls(); ++c)
+      out << "," << u.ValuesAt(static_cast<int>(i))[static_cast<size_t>(c)];
+    out << "\n";
+  }
+  return out.str();
+}
+
+Status WritePlanFiles(const std::string& dir, const System& sys, const Eigen::VectorXd& params,
+                      const Eigen::MatrixXd& prior_cov, const PlanOptions& o, const Motion& plan,
+                      const std::vector<Motion>& usual) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Status::Error(dir + ": cannot create the output directory: " + ec.message());
+  nlohmann::json j;
+  j["model"] = sys.model().name();
+  std::vector<std::string> names, units;
+  for (const auto& p : sys.params()) names.push_back(p.name), units.push_back(p.unit);
+  j["params"] = names;
+  j["units"] = units;
+  j["design_point"] = std::vector<double>(params.data(), params.data() + params.size());
+  const Eigen::VectorXd s0 = prior_cov.diagonal().cwiseSqrt();
+  j["prior_sigma"] = std::vector<double>(s0.data(), s0.data() + s0.size());
+  std::vector<double> targets(static_cast<size_t>(sys.num_params()), 0.0);
+  for (int i = 0; i < o.targets.size(); ++i) targets[static_cast<size_t>(i)] = o.targets[i];
+  j["targets"] = targets;
+  j["care"] = o.care;
+  j["duration_s"] = o.duration_s;
+  j["criterion"] = o.criterion == DesignCriterion::kA   ? "A"
+                   : o.criterion == DesignCriterion::kD ? "D"
+                                                        : "targets";
+  j["pose_sigma"] = {o.info.pose_sigma.x(), o.info.pose_sigma.y(), o.info.pose_sigma.z()};
+  j["pose_rate_hz"] = o.info.pose_rate_hz;
+  j["plan"] = CurveJson(plan);
+  j["usual"] = nlohmann::json::array();
+  for (const auto& m : usual) j["usual"].push_back(CurveJson(m));
+  if (Status s = WriteFileAtomically(dir + "/plan.csv", ControlsCsv(sys, plan.controls), "plan");
+      !s.ok()) {
+    return s;
+  }
+  return WriteFileAtomically(dir + "/plan.json", j.dump(1) + "\n", "plan");
+}
+
+void PrintPlanSummary(const System& sys, const PlanOptions& o, const Motion& plan,
+                      const std::vector<Motion>& usual, std::ostream& out) {
+  out << "predicted sigma after " << o.duration_s << " s";
+  if (o.targets.size() > 0) out << " and time to the targets";
+  out << ":\n" << std::left << std::setw(18) << "motion";
+  for (const auto& p : sys.params()) out << std::setw(12) << p.name;
+  out << "time to target\n";
+  std::vector<const Motion*> all = {&plan};
+  for (const auto& m : usual) all.push_back(&m);
+  for (const Motion* m : all) {
+    out << std::setw(18) << m->name;
+    for (int i = 0; i < sys.num_params(); ++i)
+      out << std::setw(12) << std::setprecision(3) << m->curve.sigma.back()[i];
+    if (std::isfinite(m->curve.time_to_target_s)) {
+      out << (m->curve.extrapolated ? "~" : "") << std::setprecision(4) << m->curve.time_to_target_s
+          << " s" << (m->curve.extrapolated ? " (extrapolated)" : "");
+    } else {
+      out << "-";
+    }
+    if (!m->stays_in) out << "  leaves the workspace at " << m->left_at_s << " s";
+    out << "\n";
+  }
+}
+
+Status PublishPlan(const System& sys, const Motion& plan, const std::string& channel) {
+  lcm::LCM lcm;
+  if (!lcm.good())
+    return Status::Error("--publish: LCM could not be initialised (check LCM_DEFAULT_URL)");
+  kincal::controls_t m{};
+  m.schema_version = 1;
+  m.model = std::string(sys.model().name());
+  m.num_controls = sys.num_controls();
+  for (const auto& c : sys.model().controls()) m.names.push_back(c.name);
+  m.values.assign(static_cast<size_t>(m.num_controls), 0.0);
+  const auto start = std::chrono::steady_clock::now();
+  const auto wall0 = std::chrono::system_clock::now();
+  for (size_t i = 0; i < plan.controls.size(); ++i) {
+    const double t = plan.controls.TimeAt(static_cast<int>(i));
+    const auto due = start + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                 std::chrono::duration<double>(t));
+    std::this_thread::sleep_until(due);
+    for (int c = 0; c < m.num_controls; ++c)
+      m.values[static_cast<size_t>(c)] =
+          plan.controls.ValuesAt(static_cast<int>(i))[static_cast<size_t>(c)];
+    const auto wall = wall0 + std::chrono::duration_cast<std::chrono::system_clock::duration>(
+                                  std::chrono::duration<double>(t));
+    m.utime = m.sender_utime =
+        std::chrono::duration_cast<std::chrono::microseconds>(wall.time_since_epoch()).count();
+    if (lcm.publish(channel, &m) != 0)
+      return Status::Error("--publish: LCM publish on " + channel + " failed");
+  }
+  return Status{};
+}
+
+}  // namespace kincal

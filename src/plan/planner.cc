@@ -1,0 +1,272 @@
+#include "kincal/plan/planner.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+
+#include "kincal/angles.h"
+#include "plan/shaping.h"
+
+namespace kincal {
+namespace {
+
+using plan_internal::Values;
+
+constexpr double kNonlinearMargin = 1.2;
+
+// The robots that must stay in: the design point and +-k sigma along each principal axis
+// of the prior.
+std::vector<Eigen::VectorXd> RobotsWithinPrior(const Eigen::VectorXd& params,
+                                               const Eigen::MatrixXd& prior_cov, double k) {
+  std::vector<Eigen::VectorXd> out = {params};
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(prior_cov);
+  for (Eigen::Index i = 0; i < params.size(); ++i) {
+    const Eigen::VectorXd d =
+        k * std::sqrt(std::max(eig.eigenvalues()[i], 0.0)) * eig.eigenvectors().col(i);
+    out.push_back(params + d);
+    out.push_back(params - d);
+  }
+  return out;
+}
+
+// Robot states driven along the plan, for the stay-in check: the design point, then the
+// robots at + and - k sigma along each principal axis of the prior, in pairs.
+struct Fleet {
+  std::vector<StateVec> x;
+  double t_s = 0.0;
+};
+
+// Whether every robot within the k-sigma ellipsoid of the prior keeps its target inside.
+// The axis robots are checked as they are (nonlinear); the ellipsoid between them through
+// the pose's spread they imply: half the difference of each pair is the pose's change
+// along that axis, so the poses within the ellipsoid fill, to first order, the ellipsoid
+// of covariance D D' about the nominal pose; its six extreme points, pushed a fifth
+// further out for what the first order misses over a long open-loop run, are checked too.
+bool FleetInside(const System& sys, const Workspace& ws, const Fleet& f) {
+  Eigen::Vector3d z0;
+  sys.Measure(f.x[0].data(), z0.data());
+  if (!ws.Contains(z0)) return false;
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (size_t k = 1; k + 1 < f.x.size(); k += 2) {
+    Eigen::Vector3d zp, zm;
+    sys.Measure(f.x[k].data(), zp.data());
+    sys.Measure(f.x[k + 1].data(), zm.data());
+    if (!ws.Contains(zp) || !ws.Contains(zm)) return false;
+    Eigen::Vector3d d = 0.5 * (zp - zm);
+    d.z() = WrapAngle(d.z());
+    cov += d * d.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d a = kNonlinearMargin * std::sqrt(std::max(eig.eigenvalues()[i], 0.0)) *
+                              eig.eigenvectors().col(i);
+    if (!ws.Contains(z0 + a) || !ws.Contains(z0 - a)) return false;
+  }
+  return true;
+}
+
+// Drives the fleet to t1 (checking every `check_s`); false if any target leaves.
+bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, double t1,
+                double check_s, Fleet* f) {
+  while (f->t_s < t1 - 1e-12) {
+    const double t = std::min(t1, f->t_s + check_s);
+    for (auto& x : f->x) {
+      sys.Propagate(x.data(), x.data(), f->t_s, t, u, static_cast<const double*>(nullptr));
+    }
+    f->t_s = t;
+    if (!FleetInside(sys, ws, *f)) return false;
+  }
+  return true;
+}
+
+// The candidate controls: a grid of `levels` values over each channel's limits.
+std::vector<Values> CandidateGrid(const System& sys, const Eigen::VectorXd& params,
+                                  const PlanOptions& o) {
+  const int nc = sys.num_controls();
+  std::vector<Values> out(1, Values{});
+  for (int c = 0; c < nc; ++c) {
+    std::vector<Values> next;
+    for (const Values& base : out) {
+      for (int l = 0; l < o.levels; ++l) {
+        Values v = base;
+        v[static_cast<size_t>(c)] =
+            o.max_abs[static_cast<size_t>(c)] * (-1.0 + 2.0 * l / (o.levels - 1));
+        next.push_back(v);
+      }
+    }
+    out = std::move(next);
+  }
+  if (o.max_curvature > 0.0) {
+    std::erase_if(out, [&](const Values& v) {
+      const Eigen::Vector2d tw = plan_internal::TwistOf(sys, params, v);
+      return std::abs(tw.y()) > o.max_curvature * std::abs(tw.x()) + 1e-12;
+    });
+  }
+  return out;
+}
+
+Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
+  return prior_cov.diagonal().cwiseSqrt();
+}
+
+void Record(const DesignInformation& info, SigmaCurve* c) {
+  c->t_s.push_back(info.time_s());
+  c->sigma.push_back(info.Covariance().diagonal().cwiseSqrt());
+}
+
+// Tries one candidate: drives it for a segment and a stop after it. Returns its score, or
+// +inf when a robot within the prior would leave the workspace.
+double TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
+                    const Eigen::VectorXd& prior_sigma, const Values& cand, double t0,
+                    const ControlSignal& u0, const Values& now, const DesignInformation& info0,
+                    const Fleet& fleet0, ControlSignal* u_out, Values* end_out,
+                    DesignInformation* info_out) {
+  ControlSignal u = u0;
+  Values at = now;
+  const double t1 = t0 + o.segment_s;
+  plan_internal::AppendSlewed(&u, t0, t1, cand, o, &at);
+  const Values end = at;
+  ControlSignal braked = u;
+  Values b = at;
+  plan_internal::AppendSlewed(&braked, t1, t1 + o.segment_s + 1.0, Values{}, o, &b);
+  Fleet fleet = fleet0;
+  if (!DriveFleet(sys, braked, ws, t1 + o.segment_s + 1.0, 0.05, &fleet)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  DesignInformation info = info0;
+  info.Advance(t1, u);
+  const double score = DesignScore(info.Covariance(), prior_sigma, o);
+  *u_out = std::move(u);
+  *end_out = end;
+  *info_out = std::move(info);
+  return score;
+}
+
+}  // namespace
+
+bool PlanOptions::IsValid(const System& sys, std::string* error) const {
+  const size_t nc = static_cast<size_t>(sys.num_controls());
+  if (!(duration_s > 0.0 && duration_s <= 3600.0) ||
+      !(control_rate_hz >= 1.0 && control_rate_hz <= 1000.0) ||
+      !(segment_s >= 1.0 / control_rate_hz && segment_s <= duration_s)) {
+    *error =
+        "duration in (0, 3600] s, rate in [1, 1000] Hz and a segment between one control "
+        "period and the duration expected";
+    return false;
+  }
+  if (max_abs.size() != nc) {
+    *error = "a limit for every control of " + std::string(sys.model().name()) + " expected (";
+    for (const auto& c : sys.model().controls()) *error += c.name + "=.. ";
+    *error += "missing)";
+    return false;
+  }
+  for (size_t c = 0; c < nc; ++c) {
+    if (!(max_abs[c] > 0.0) || !std::isfinite(max_abs[c]) ||
+        (c < max_accel.size() && !(max_accel[c] >= 0.0))) {
+      *error = "limit of " + sys.model().controls()[c].name +
+               ": a positive value (and an acceleration >= 0) expected";
+      return false;
+    }
+  }
+  if (!(max_curvature >= 0.0) || levels < 3 || levels % 2 == 0 || levels > 9 ||
+      !(prior_sigmas >= 0.0)) {
+    *error = "curvature >= 0, an odd number of levels in 3..9 and prior_sigmas >= 0 expected";
+    return false;
+  }
+  for (int i : care) {
+    if (i < 0 || i >= sys.num_params()) {
+      *error = "care: a parameter index of the system expected";
+      return false;
+    }
+  }
+  if (targets.size() != 0 && targets.size() != sys.num_params()) {
+    *error = "targets: one sigma per parameter (0: none) expected";
+    return false;
+  }
+  return info.IsValid(error);
+}
+
+double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
+                   const PlanOptions& o) {
+  std::vector<int> idx = o.care;
+  if (idx.empty()) {
+    for (int i = 0; i < cov.rows(); ++i) idx.push_back(i);
+  }
+  const int n = static_cast<int>(idx.size());
+  Eigen::MatrixXd c(n, n);
+  for (int a = 0; a < n; ++a) {
+    for (int b = 0; b < n; ++b) {
+      const int i = idx[static_cast<size_t>(a)], j = idx[static_cast<size_t>(b)];
+      const double si = o.targets.size() > 0 && o.targets[i] > 0.0 ? o.targets[i] : prior_sigma[i];
+      const double sj = o.targets.size() > 0 && o.targets[j] > 0.0 ? o.targets[j] : prior_sigma[j];
+      c(a, b) = cov(i, j) / (si * sj);
+    }
+  }
+  if (o.criterion == DesignCriterion::kA) return c.trace();
+  if (o.criterion == DesignCriterion::kTargets) return c.diagonal().array().square().sum();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(c);
+  return ldlt.vectorD().array().log().sum();
+}
+
+Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
+                  const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                  Motion* plan) {
+  std::string error;
+  if (!o.IsValid(sys, &error)) return Status::Error("plan: " + error);
+  const Eigen::Vector2d c = ws.Centre();
+  const Eigen::Vector3d start(c.x(), c.y(), 0.0);
+  plan->name = "plan";
+  plan->controls = ControlSignal(sys.num_controls(), 0);
+  plan->segment_starts_s = {0.0};
+  plan->curve = SigmaCurve{};
+  DesignInformation info(sys, params, prior_cov, o.info);
+  info.StartSegment(start, 0.0, plan->controls);
+  Fleet fleet;
+  for (const auto& p : RobotsWithinPrior(params, prior_cov, o.prior_sigmas)) {
+    fleet.x.push_back(sys.MakeState(start.x(), start.y(), start.z(), p, plan->controls, 0.0));
+  }
+  if (!ws.Contains(info.MeasuredPose())) {
+    return Status::Error("plan: the target at the start pose is outside the " + ws.Describe());
+  }
+  const std::vector<Values> grid = CandidateGrid(sys, params, o);
+  const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
+  Values now{};
+  Record(info, &plan->curve);
+  const int segments = static_cast<int>(std::ceil(o.duration_s / o.segment_s - 1e-9));
+  for (int s = 0; s < segments; ++s) {
+    const double t0 = s * o.segment_s;
+    double best = std::numeric_limits<double>::infinity();
+    ControlSignal best_u;
+    Values best_end{};
+    DesignInformation best_info = info;
+    for (const Values& cand : grid) {
+      ControlSignal u;
+      Values end{};
+      DesignInformation ci = info;
+      const double score = TryCandidate(sys, ws, o, prior_sigma, cand, t0, plan->controls, now,
+                                        info, fleet, &u, &end, &ci);
+      if (score < best) {
+        best = score;
+        best_u = std::move(u);
+        best_end = end;
+        best_info = std::move(ci);
+      }
+    }
+    if (!std::isfinite(best)) {
+      return Status::Error("plan: no control keeps every robot within the prior inside the " +
+                           ws.Describe() + " after " + std::to_string(t0) +
+                           " s; widen the workspace or lower the speed limits");
+    }
+    plan->controls = std::move(best_u);
+    now = best_end;
+    info = std::move(best_info);
+    DriveFleet(sys, plan->controls, ws, t0 + o.segment_s, 0.05, &fleet);
+    Record(info, &plan->curve);
+  }
+  plan->controls.Append(
+      plan->controls.ToNs(segments * o.segment_s),
+      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  return Status{};
+}
+
+}  // namespace kincal

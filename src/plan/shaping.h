@@ -1,0 +1,31 @@
+// Control shaping shared by the planner and the usual motions: channels that slew at
+// their acceleration limits, and the controls that give a wanted body twist.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "kincal/control_signal.h"
+#include "kincal/plan/planner.h"
+#include "kincal/system.h"
+
+namespace kincal::plan_internal {
+
+using Values = ControlSignal::Values;
+
+// Appends samples every 1 / control_rate_hz from t0_s (inclusive) to t1_s (exclusive),
+// the channels moving from *u towards `to` together (a straight ramp in control space, as
+// fast as the slowest channel's acceleration limit allows); *u ends at the last value
+// appended. Times are seconds on the signal's origin.
+void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values& to,
+                  const PlanOptions& o, Values* u);
+
+// Controls within the limits whose body twist at `params` is (v, omega) as nearly as the
+// limits allow (least squares, Levenberg-Marquardt from a forward guess). Returns whether
+// the twist is reached to 1e-6 of its size.
+bool TwistToControls(const System& sys, const Eigen::VectorXd& params, double v, double omega,
+                     const PlanOptions& o, Values* u);
+
+// Body twist (v, omega) of controls u at params.
+Eigen::Vector2d TwistOf(const System& sys, const Eigen::VectorXd& params, const Values& u);
+
+}  // namespace kincal::plan_internal

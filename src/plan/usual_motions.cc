@@ -1,0 +1,265 @@
+// The motions people calibrate with today, drawn to the workspace and the limits, and the
+// evaluation every motion (the plan too) gets.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+#include "kincal/plan/planner.h"
+#include "kincal/thesis.h"
+#include "plan/shaping.h"
+
+namespace kincal {
+namespace {
+
+using plan_internal::Values;
+
+constexpr double kHeadroom = 0.7;  // of each limit, left for turning and slewing
+
+// A twist schedule: (v, omega, duration) pieces; each piece is reached by slewing.
+struct Piece {
+  double v, omega, seconds;
+};
+
+// Fastest forward speed whose controls (and those of turning at radius r) fit within the
+// headroom of the limits.
+double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                   double radius) {
+  double lo = 0.0, hi = 10.0;
+  for (int it = 0; it < 50; ++it) {
+    const double v = 0.5 * (lo + hi);
+    Values u{};
+    PlanOptions tight = o;
+    for (double& m : tight.max_abs) m *= kHeadroom;
+    const bool ok =
+        plan_internal::TwistToControls(sys, p, v, radius > 0.0 ? v / radius : 0.0, tight, &u);
+    (ok ? lo : hi) = v;
+  }
+  return lo;
+}
+
+// Fastest turn in place within the headroom, 0 when the robot cannot turn in place.
+double SpinRate(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o) {
+  if (o.max_curvature > 0.0) return 0.0;
+  double lo = 0.0, hi = 50.0;
+  for (int it = 0; it < 50; ++it) {
+    const double w = 0.5 * (lo + hi);
+    Values u{};
+    PlanOptions tight = o;
+    for (double& m : tight.max_abs) m *= kHeadroom;
+    (plan_internal::TwistToControls(sys, p, 0.0, w, tight, &u) ? lo : hi) = w;
+  }
+  return lo > 1e-3 ? lo : 0.0;
+}
+
+// The tightest turn within the headroom at a tenth of the straight cruise speed (a
+// steered robot's steering limit); 0 when it turns in place.
+double MinTurnRadius(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                     double straight_speed) {
+  PlanOptions tight = o;
+  for (double& m : tight.max_abs) m *= kHeadroom;
+  const double v = 0.1 * straight_speed;
+  Values u{};
+  double lo = 0.0, hi = 1e3;  // curvature, 1/m
+  for (int it = 0; it < 60; ++it) {
+    const double k = 0.5 * (lo + hi);
+    (plan_internal::TwistToControls(sys, p, v, v * k, tight, &u) ? lo : hi) = k;
+  }
+  // A tenth wider: at the steering limit itself the controls of faster turns are found
+  // only at the edge of the box.
+  return lo >= 999.0 ? 0.0 : 1.1 / std::max(lo, 1e-9);
+}
+
+Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                  const std::string& name, const std::vector<Piece>& pieces) {
+  Motion m;
+  m.name = name;
+  m.controls = ControlSignal(sys.num_controls(), 0);
+  m.segment_starts_s = {0.0};
+  Values now{};
+  double t = 0.0;
+  for (size_t k = 0; t < o.duration_s - 1e-9; k = (k + 1) % pieces.size()) {
+    Values to{};
+    plan_internal::TwistToControls(sys, p, pieces[k].v, pieces[k].omega, o, &to);
+    const double t1 = std::min(o.duration_s, t + pieces[k].seconds);
+    plan_internal::AppendSlewed(&m.controls, t, t1, to, o, &now);
+    t = t1;
+  }
+  m.controls.Append(
+      m.controls.ToNs(o.duration_s),
+      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  return m;
+}
+
+// Seconds the channels need to slew from rest to the controls of twist (v, omega).
+double RampTime(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o, double v,
+                double omega) {
+  Values u{};
+  plan_internal::TwistToControls(sys, p, v, omega, o, &u);
+  double t = 0.0;
+  for (size_t c = 0; c < o.max_accel.size(); ++c) {
+    if (o.max_accel[c] > 0.0) t = std::max(t, std::abs(u[c]) / o.max_accel[c]);
+  }
+  return t;
+}
+
+// Sides and corners with a stop between them: a straight ramp up and down integrates to
+// the piece's full length, so the square closes (a lag only delays it).
+std::vector<Piece> Square(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                          double side, double v, double spin, double turn_radius) {
+  const Piece edge{v, 0.0, side / v};
+  const Piece corner = spin > 0.0
+                           ? Piece{0.0, spin, 0.5 * std::numbers::pi / spin}
+                           : Piece{v, v / turn_radius, 0.5 * std::numbers::pi * turn_radius / v};
+  return {edge,
+          {0.0, 0.0, RampTime(sys, p, o, edge.v, edge.omega)},
+          corner,
+          {0.0, 0.0, RampTime(sys, p, o, corner.v, corner.omega)}};
+}
+
+// The thesis's Table 6-4 runs as twists at its nominal robot, scaled so that the fastest
+// fits, each a segment of equal length.
+// Runs a robot cannot drive (tighter than its tightest turn) are left out, and the name
+// says how many were kept.
+Motion ThesisRuns(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                  double min_radius) {
+  Motion m;
+  m.controls = ControlSignal(sys.num_controls(), 0);
+  std::vector<Eigen::Vector2d> twists;
+  double scale = std::numeric_limits<double>::infinity();
+  for (const auto& w : kThesisControls) {
+    const double v = 0.5 * (kThesisRL * w[0] + kThesisRR * w[1]);
+    const double om = (kThesisRR * w[1] - kThesisRL * w[0]) / kThesisD;
+    if (min_radius > 0.0 && std::abs(om) * min_radius > std::abs(v)) continue;
+    twists.emplace_back(v, om);
+  }
+  m.name = twists.size() == 99 ? std::string("thesis 99 runs")
+                               : "thesis runs (" + std::to_string(twists.size()) + " of 99)";
+  if (twists.empty()) return m;
+  // One common scale: the largest at which every run's controls fit the headroom.
+  double lo = 0.0, hi = 1.0;
+  for (int it = 0; it < 40; ++it) {
+    const double s = 0.5 * (lo + hi);
+    bool fits = true;
+    PlanOptions tight = o;
+    for (double& x : tight.max_abs) x *= kHeadroom;
+    for (const auto& tw : twists) {
+      Values u{};
+      fits = fits && plan_internal::TwistToControls(sys, p, s * tw.x(), s * tw.y(), tight, &u);
+    }
+    (fits ? lo : hi) = s;
+  }
+  scale = lo;
+  const double each = o.duration_s / static_cast<double>(twists.size());
+  Values now{};
+  double t = 0.0;
+  for (const auto& tw : twists) {
+    Values to{};
+    plan_internal::TwistToControls(sys, p, scale * tw.x(), scale * tw.y(), o, &to);
+    m.segment_starts_s.push_back(t);
+    now = Values{};  // each run starts at rest
+    plan_internal::AppendSlewed(&m.controls, t, t + each, to, o, &now);
+    t += each;
+  }
+  m.controls.Append(
+      m.controls.ToNs(t),
+      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  return m;
+}
+
+double TimeToTarget(const SigmaCurve& c, const Eigen::VectorXd& targets, const PlanOptions& o,
+                    bool* extrapolated) {
+  *extrapolated = false;
+  if (targets.size() == 0 || c.t_s.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<int> idx = o.care;
+  if (idx.empty()) {
+    for (int i = 0; i < targets.size(); ++i) idx.push_back(i);
+  }
+  for (size_t k = 0; k < c.t_s.size(); ++k) {
+    bool met = true;
+    for (int i : idx) met = met && (!(targets[i] > 0.0) || c.sigma[k][i] <= targets[i]);
+    if (met) return c.t_s[k];
+  }
+  *extrapolated = true;
+  double worst = 1.0;
+  for (int i : idx) {
+    if (targets[i] > 0.0) worst = std::max(worst, std::pow(c.sigma.back()[i] / targets[i], 2));
+  }
+  return c.t_s.back() * worst;
+}
+
+}  // namespace
+
+std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& params,
+                                 const Eigen::MatrixXd& prior_cov, const Workspace& ws,
+                                 const PlanOptions& o) {
+  const double size = ws.Size();
+  const double spin = SpinRate(sys, params, o);
+  const double min_radius =
+      std::max(o.max_curvature > 0.0 ? 1.0 / o.max_curvature : 0.0,
+               MinTurnRadius(sys, params, o, CruiseSpeed(sys, params, o, 0.0)));
+  std::vector<Motion> out;
+  // Drawn from the start at the workspace's centre, heading +x: each shape lies within
+  // 0.4 of the workspace's width of it (the square on one side, the circles above and
+  // below), leaving room for a lag's overshoot.
+  {
+    const double side = 0.4 * size, r = std::max(min_radius, 0.1 * size);
+    const double v = CruiseSpeed(sys, params, o, spin > 0.0 ? 0.0 : r);
+    out.push_back(FromPieces(sys, params, o, "square", Square(sys, params, o, side, v, spin, r)));
+  }
+  {
+    const double r = std::max(min_radius, 0.2 * size), v = CruiseSpeed(sys, params, o, r);
+    const double loop = 2.0 * std::numbers::pi * r / v;
+    const int laps = std::max(1, static_cast<int>(0.5 * o.duration_s / loop));
+    out.push_back(FromPieces(sys, params, o, "circle each way",
+                             {{v, v / r, laps * loop}, {v, -v / r, laps * loop}}));
+  }
+  {
+    const double r = std::max(min_radius, 0.15 * size), v = CruiseSpeed(sys, params, o, r);
+    const double loop = 2.0 * std::numbers::pi * r / v;
+    out.push_back(
+        FromPieces(sys, params, o, "figure-eight", {{v, v / r, loop}, {v, -v / r, loop}}));
+  }
+  Motion runs = ThesisRuns(sys, params, o, min_radius);
+  if (!runs.segment_starts_s.empty()) out.push_back(std::move(runs));
+  for (auto& m : out) EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &m);
+  return out;
+}
+
+void EvaluateMotion(const System& sys, const Eigen::VectorXd& params,
+                    const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                    double step_s, Motion* m) {
+  const Eigen::Vector2d c = ws.Centre();
+  const Eigen::Vector3d start(c.x(), c.y(), 0.0);
+  DesignInformation info(sys, params, prior_cov, o.info);
+  m->curve = SigmaCurve{};
+  m->path.clear();
+  m->stays_in = true;
+  m->left_at_s = -1.0;
+  std::vector<double> starts = m->segment_starts_s;
+  if (starts.empty()) starts = {0.0};
+  size_t next_start = 0;
+  constexpr double kCheckS = 0.05;  // how often the target is checked to be inside
+  double next_record = 0.0;
+  for (double t = 0.0; t <= o.duration_s + 1e-9; t += kCheckS) {
+    while (next_start < starts.size() && starts[next_start] <= t + 1e-9) {
+      if (next_start > 0) info.Advance(starts[next_start], m->controls);
+      info.StartSegment(start, starts[next_start], m->controls);
+      ++next_start;
+    }
+    info.Advance(t, m->controls);
+    if (m->stays_in && !ws.Contains(info.MeasuredPose())) {
+      m->stays_in = false;
+      m->left_at_s = t;
+    }
+    if (t >= next_record - 1e-9) {
+      m->curve.t_s.push_back(t);
+      m->curve.sigma.push_back(info.Covariance().diagonal().cwiseSqrt());
+      m->path.push_back(info.MeasuredPose());
+      next_record += step_s;
+    }
+  }
+  m->curve.time_to_target_s = TimeToTarget(m->curve, o.targets, o, &m->curve.extrapolated);
+}
+
+}  // namespace kincal

@@ -1,0 +1,225 @@
+// kincal plan against the motions people use, on the reference case (a
+// differential drive with actuator lag, time offset and lever arm, poses at 15 Hz with
+// 2 mm / 5 mrad), on a unicycle with a lag and on a tricycle; the plan keeps every robot
+// within its prior in the workspace; the sigma it predicts is the sigma batch fits of
+// simulated runs of it realise.
+#include "kincal/plan/planner.h"
+
+#include <gtest/gtest.h>
+
+#include <iostream>
+#include <random>
+
+#include "kincal/estimation/batch.h"
+#include "kincal/simulator.h"
+#include "kincal/vision/setup_files.h"
+
+namespace kincal {
+namespace {
+
+struct Case {
+  System sys;
+  Eigen::VectorXd p, prior_sigma;
+  PlanOptions o;
+};
+
+// The reference case: lengths to 0.1 %, lag and delay to 3 ms, lever arm to 2 mm.
+Case Reference(double duration_s) {
+  Case c{MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}), {}, {}, {}};
+  c.p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
+  c.prior_sigma = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05).finished();
+  c.o.duration_s = duration_s;
+  c.o.max_abs = {20.0, 20.0};
+  c.o.max_accel = {40.0, 40.0};
+  c.o.targets = (Eigen::VectorXd(8) << 3e-5, 3e-5, 3e-4, 3e-3, 3e-3, 2e-3, 2e-3, 0.0).finished();
+  c.o.care = {0, 1, 2, 3, 4, 5, 6};
+  return c;
+}
+
+// The fastest usual motion that stays in, against the plan: the ratio of their times.
+double SpeedUp(const Case& c, const Workspace& ws, const char* label) {
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  Motion plan;
+  const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan);
+  EXPECT_TRUE(s.ok()) << s.message();
+  EvaluateMotion(c.sys, c.p, prior, ws, c.o, kCurveStepS, &plan);
+  EXPECT_TRUE(plan.stays_in);
+  double best = 1e300;
+  std::string best_name;
+  for (const Motion& m : UsualMotions(c.sys, c.p, prior, ws, c.o)) {
+    std::cout << label << ": " << m.name << " " << m.curve.time_to_target_s << " s"
+              << (m.stays_in ? "" : " (leaves)") << "\n";
+    if (m.stays_in && m.curve.time_to_target_s < best) {
+      best = m.curve.time_to_target_s;
+      best_name = m.name;
+    }
+  }
+  std::cout << label << ": plan " << plan.curve.time_to_target_s << " s, best usual (" << best_name
+            << ") " << best << " s: " << best / plan.curve.time_to_target_s << " x\n";
+  EXPECT_FALSE(plan.curve.extrapolated);
+  return best / plan.curve.time_to_target_s;
+}
+
+TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
+  const Case c = Reference(30.0);
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  EXPECT_GE(SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm"), 1.5);
+}
+
+TEST(Plan, UnicycleWithALagAndATricycle) {
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  Case u{MakeSystem("unicycle", {"actuator_lag"}), {}, {}, {}};
+  u.p = (Eigen::VectorXd(3) << 1.0, 1.0, 0.15).finished();
+  u.prior_sigma = (Eigen::VectorXd(3) << 0.1, 0.1, 0.1).finished();
+  u.o.duration_s = 30.0;
+  u.o.max_abs = {0.5, 2.0};
+  u.o.max_accel = {1.0, 4.0};
+  u.o.targets = (Eigen::VectorXd(3) << 1e-3, 1e-3, 3e-3).finished();
+  // Every motion reaches these targets within seconds: planning changes little here, and
+  // the greedy plan is within a quarter of the best usual motion (circles each way).
+  EXPECT_GE(SpeedUp(u, *ws, "unicycle + lag"), 0.75);
+
+  Case t{MakeSystem("tricycle"), {}, {}, {}};
+  t.p = (Eigen::VectorXd(4) << 0.001, 0.0, 1e-4, 0.5).finished();
+  t.prior_sigma = (Eigen::VectorXd(4) << 1e-4, 0.03, 1e-5, 0.05).finished();
+  t.o.duration_s = 30.0;
+  t.o.max_abs = {1000.0, 5000.0};
+  t.o.max_accel = {2000.0, 5000.0};
+  t.o.targets = (Eigen::VectorXd(4) << 1e-6, 1e-3, 1e-7, 5e-4).finished();
+  // Its tightest turn (0.66 m at 0.7 rad of steering) needs a larger floor for the
+  // usual motions to fit.
+  EXPECT_GE(SpeedUp(t, *MakeArena(-3.0, -2.0, 3.0, 2.0), "tricycle"), 1.0);
+}
+
+// 200 robots drawn from the prior (inside its 3-sigma ellipsoid) driven open loop along the
+// plan: the target never leaves the camera's view. The workspace is a real camera's view:
+// the shipped simulated camera (640x480, f 500 px, 2 m up), markers 10 px inside.
+TEST(Plan, EveryRobotWithinThePriorStaysInView) {
+  Case c = Reference(20.0);
+  vision::CameraModel cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.fx = cam.fy = 500.0;
+  cam.cx = 319.5;
+  cam.cy = 239.5;
+  const auto ws =
+      MakeCameraView(cam, vision::NadirFloor(2.0), vision::TargetLayout::Thesis(), 0.1, 10.0);
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  // Slower wheels: the view is 2.5 x 1.9 m.
+  c.o.max_abs = {12.0, 12.0};
+  Motion plan;
+  const Status s = PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan);
+  ASSERT_TRUE(s.ok()) << s.message();
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<TimeNs> times;
+  for (double t = 0.0; t <= c.o.duration_s + 2.0; t += 0.02) times.push_back(SecondsToNs(t));
+  int drawn = 0;
+  double farthest = 0.0;
+  while (drawn < 200) {
+    Eigen::VectorXd z(c.p.size());
+    for (int i = 0; i < z.size(); ++i) z[i] = g(rng);
+    if (z.norm() > 3.0) continue;
+    ++drawn;
+    const Eigen::VectorXd p = c.p + c.prior_sigma.cwiseProduct(z);
+    const Eigen::Vector2d centre = ws->Centre();
+    const VecN<kMaxState> pv = p;
+    const auto traj = SimulateTruth(
+        c.sys, c.sys.MakeState(centre.x(), centre.y(), 0.0, pv, ControlSignal(2, 0), 0.0),
+        plan.controls, times);
+    for (const auto& tp : traj) {
+      ASSERT_TRUE(ws->Contains(tp.target))
+          << "robot " << drawn << " at " << tp.target.transpose() << " z " << z.transpose()
+          << " leaves the view at " << NsToSeconds(tp.t_ns) << " s";
+      farthest = std::max(farthest, (tp.target.head<2>() - centre).norm());
+    }
+  }
+  std::cout << "200 robots within the prior stay in view; farthest " << farthest << " m from the"
+            << " centre of a view " << ws->Size() << " m across\n";
+  EXPECT_GT(farthest, 0.25 * ws->Size());  // it does use the view
+}
+
+// The plan driven by the true robot, poses with Gaussian noise, fitted by the batch
+// (Ceres, from the design point): over 40 trials the errors' spread is the predicted sigma
+// within 20 % (pooled over the parameters scored; each within 35 %) and they lie inside
+// 3 sigma.
+TEST(Plan, RealisedSigmaIsThePredictedSigma) {
+  Case c = Reference(15.0);
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  Motion plan;
+  ASSERT_TRUE(PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan).ok());
+  EvaluateMotion(c.sys, c.p, prior, *ws, c.o, kCurveStepS, &plan);
+  const Eigen::VectorXd predicted = plan.curve.sigma.back();
+  const Eigen::Vector3d sigma = c.o.info.pose_sigma;
+  std::vector<TimeNs> times;
+  for (double t = 0.0; t <= c.o.duration_s + 1e-9; t += 1.0 / c.o.info.pose_rate_hz) {
+    times.push_back(SecondsToNs(t));
+  }
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> g(0.0, 1.0);
+  const int trials = 40;
+  Eigen::VectorXd sq = Eigen::VectorXd::Zero(c.p.size());
+  int inside = 0, total = 0;
+  for (int k = 0; k < trials; ++k) {
+    // The truth drawn from the prior the plan was made for.
+    Eigen::VectorXd truth = c.p;
+    for (int i = 0; i < truth.size(); ++i) truth[i] += 0.1 * c.prior_sigma[i] * g(rng);
+    const VecN<kMaxState> tv = truth;
+    const auto traj = SimulateTruth(c.sys, c.sys.MakeState(0, 0, 0, tv, ControlSignal(2, 0), 0.0),
+                                    plan.controls, times);
+    const auto meas = MeasurePoses(traj, sigma.cwiseAbs2().asDiagonal(), 0, rng);
+    BatchOptions bo;
+    bo.prior = ParamPrior{c.p, prior};
+    const BatchResult b = FitBatch(c.sys, plan.controls, meas, c.p, bo);
+    ASSERT_TRUE(b.status.ok()) << b.status.message();
+    for (int i : c.o.care) {
+      const double e = b.params[i] - truth[i];
+      sq[i] += e * e;
+      inside += std::abs(e) <= 3.0 * predicted[i] ? 1 : 0;
+      ++total;
+    }
+  }
+  double pooled = 0.0;
+  for (int i : c.o.care) {
+    const double ratio = std::sqrt(sq[i] / trials) / predicted[i];
+    std::cout << c.sys.params()[static_cast<size_t>(i)].name << ": realised/predicted sigma "
+              << ratio << "\n";
+    EXPECT_GT(ratio, 0.65);
+    EXPECT_LT(ratio, 1.35);
+    pooled += sq[i] / (trials * predicted[i] * predicted[i]);
+  }
+  pooled = std::sqrt(pooled / static_cast<double>(c.o.care.size()));
+  std::cout << "pooled realised/predicted " << pooled << ", " << inside << " of " << total
+            << " errors inside 3 sigma\n";
+  EXPECT_NEAR(pooled, 1.0, 0.2);
+  EXPECT_GE(inside, total * 97 / 100);
+}
+
+TEST(Plan, OptionsAreCheckedAndNamed) {
+  const Case c = Reference(10.0);
+  std::string error;
+  EXPECT_TRUE(c.o.IsValid(c.sys, &error)) << error;
+  PlanOptions o = c.o;
+  o.max_abs = {20.0};
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_NE(error.find("omega_r"), std::string::npos) << error;
+  o = c.o;
+  o.max_accel = {-1.0, 1.0};
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_NE(error.find("omega_l"), std::string::npos) << error;
+  o = c.o;
+  o.levels = 4;
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  // A workspace too small for the start: a status, not a crash.
+  Motion m;
+  const auto tiny = MakeArena(0.5, 0.5, 0.6, 0.6);
+  const Status s = PlanMotion(c.sys, c.p, c.prior_sigma.cwiseAbs2().asDiagonal(),
+                              *MakeArena(-0.01, -0.01, 0.01, 0.01), c.o, &m);
+  EXPECT_FALSE(s.ok());
+  EXPECT_NE(s.message().find("arena"), std::string::npos) << s.message();
+  (void)tiny;
+}
+
+}  // namespace
+}  // namespace kincal
