@@ -138,6 +138,15 @@ PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
                                ", accel, accel_<control> or curvature");
     }
   }
+  for (int c = 0; c < nc; ++c) {
+    if (o.max_abs[static_cast<size_t>(c)] == 0.0) {
+      std::string all;
+      for (const auto& ci : sys.model().controls()) all += (all.empty() ? "" : ", ") + ci.name;
+      throw std::runtime_error("--limits: " + sys.model().controls()[static_cast<size_t>(c)].name +
+                               "=.. missing (a limit for every control of " +
+                               std::string(sys.model().name()) + ": " + all + ")");
+    }
+  }
   if (a.criterion == "a") {
     o.criterion = DesignCriterion::kA;
   } else if (a.criterion == "d") {

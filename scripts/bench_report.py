@@ -250,6 +250,18 @@ def users_sections(wall, times, counters, counter):
                 f"{wall[n] / 1e6:.2f} | {counter(n, 'messages_per_s'):,.0f} |",
                 "", "The whole command, Python's start-up included (`kincal` runs "
                 "scripts/kincal_import.py with the venv's Python)."]
+    plan = [n for n in wall if n.startswith("BM_Plan60s")]
+    if plan:
+        n = plan[0]
+        usual = [m for m in wall if m.startswith("BM_UsualMotions60s")]
+        out += ["", "## kincal plan (a 60 s calibration motion)", "",
+                "| what | wall s | goal |", "|---|---|---|",
+                f"| plan 60 s, reference case (diffdrive + lag, delay, lever arm; 8 parameters) | "
+                f"{wall[n] / 1e6:.2f} | ≤ 10: {'met' if wall[n] / 1e6 <= 10 else 'NOT met'} |"]
+        if usual:
+            out += [f"| the four usual motions evaluated on the same 60 s | {wall[usual[0]] / 1e6:.2f} | |"]
+        out += ["", "Default options (0.5 s segments, 5 levels per wheel, 15 Hz poses, the 3-sigma "
+                "prior kept in a 3 x 2 m arena)."]
     return out
 
 

@@ -1,0 +1,47 @@
+#!/usr/bin/env python3
+"""cli.plan: `kincal plan` on the reference case writes plan.csv (t and the model's
+controls, within the limits), plan.json (every motion's curve) and plan.png, and the plan
+reaches the targets before every usual motion that stays in.
+
+Usage: check_plan.py KINCAL OUT_DIR
+"""
+import csv
+import json
+import os
+import subprocess
+import sys
+
+
+def main() -> int:
+    kincal, out = sys.argv[1], sys.argv[2]
+    cmd = [kincal, "plan", "--model", "diffdrive",
+           "--effects", "actuator_lag,time_offset,lever_arm",
+           "--init", "r_l=0.03,r_r=0.03,d=0.3,tau_s=0.1",
+           "--arena=-1.5,-1,1.5,1", "--pose-sigma", "0.002,0.002,0.005", "--pose-rate", "15",
+           "--duration", "30", "--limits", "omega_l=20,omega_r=20,accel=40", "--rate", "20",
+           "--targets", "r_l=3e-5,r_r=3e-5,d=3e-4,tau_s=0.003,delay_s=0.003,dx=0.002,dy=0.002",
+           "--out", out]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    print(r.stdout, r.stderr)
+    if r.returncode != 0:
+        return 1
+    with open(os.path.join(out, "plan.csv"), newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == ["t", "omega_l", "omega_r"], rows[0]
+    for row in rows[1:]:
+        assert all(abs(float(x)) <= 20.0 + 1e-9 for x in row[1:]), row
+    assert float(rows[-1][0]) >= 29.9, rows[-1]
+    with open(os.path.join(out, "plan.json")) as f:
+        d = json.load(f)
+    assert d["params"][:3] == ["r_l", "r_r", "d"], d["params"]
+    assert d["plan"]["stays_in"], "the plan left the arena"
+    plan = d["plan"]["time_to_target_s"]
+    usual = [m["time_to_target_s"] for m in d["usual"] if m["stays_in"]]
+    assert plan is not None and all(plan < u for u in usual), (plan, usual)
+    assert os.path.getsize(os.path.join(out, "plan.png")) > 10000
+    print(f"check_plan: plan {plan} s, usual {sorted(usual)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

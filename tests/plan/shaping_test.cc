@@ -1,0 +1,66 @@
+// Control shaping: the controls for a wanted twist, for every model, and channels that
+// slew together at their acceleration limits.
+#include "plan/shaping.h"
+
+#include <gtest/gtest.h>
+
+namespace kincal::plan_internal {
+namespace {
+
+TEST(Shaping, TwistToControlsForEveryModel) {
+  struct Case {
+    const char* model;
+    std::vector<double> p, max_abs;
+  };
+  const std::vector<Case> cases = {
+      {"diffdrive", {0.03, 0.031, 0.3}, {30.0, 30.0}},
+      {"unicycle", {1.1, 0.9}, {1.0, 3.0}},
+      {"tricycle", {0.001, 0.02, 1e-4, 0.5}, {1000.0, 8000.0}},
+  };
+  for (const auto& c : cases) {
+    const System sys = MakeSystem(c.model);
+    const Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(c.p.data(), c.p.size());
+    PlanOptions o;
+    o.max_abs = c.max_abs;
+    for (const auto& [v, w] : std::vector<std::pair<double, double>>{{0.3, 0.0}, {0.2, 0.4}, {-0.2, 0.3}}) {
+      Values u{};
+      ASSERT_TRUE(TwistToControls(sys, p, v, w, o, &u)) << c.model << " " << v << " " << w;
+      const Eigen::Vector2d tw = TwistOf(sys, p, u);
+      EXPECT_NEAR(tw.x(), v, 1e-6) << c.model;
+      EXPECT_NEAR(tw.y(), w, 1e-6) << c.model;
+    }
+  }
+  // Beyond the limits: the nearest the box allows, and false.
+  const System dd = MakeSystem("diffdrive");
+  PlanOptions o;
+  o.max_abs = {10.0, 10.0};
+  Values u{};
+  EXPECT_FALSE(TwistToControls(dd, Eigen::Vector3d(0.03, 0.03, 0.3), 1.0, 0.0, o, &u));
+  EXPECT_NEAR(u[0], 10.0, 1e-6);
+  EXPECT_NEAR(u[1], 10.0, 1e-6);
+}
+
+TEST(Shaping, ChannelsSlewTogetherAtTheirLimits) {
+  PlanOptions o;
+  o.control_rate_hz = 100.0;
+  o.max_abs = {10.0, 10.0};
+  o.max_accel = {20.0, 40.0};
+  ControlSignal s(2, 0);
+  Values u{};
+  const Values to = {10.0, -10.0};
+  AppendSlewed(&s, 0.0, 2.0, to, o, &u);
+  // The slowest channel needs 0.5 s (10 at 20/s); the other moves 20 in the same 0.5 s.
+  EXPECT_NEAR(s.At(0.25)[0], 5.0, 0.25);
+  EXPECT_NEAR(s.At(0.25)[1], -5.0, 0.25);
+  EXPECT_NEAR(s.At(0.6)[0], 10.0, 1e-9);
+  EXPECT_NEAR(s.At(0.6)[1], -10.0, 1e-9);
+  for (size_t i = 1; i < s.size(); ++i) {
+    const auto& a = s.ValuesAt(static_cast<int>(i - 1));
+    const auto& b = s.ValuesAt(static_cast<int>(i));
+    EXPECT_LE(std::abs(b[0] - a[0]), 20.0 / 100.0 + 1e-9);
+    EXPECT_LE(std::abs(b[1] - a[1]), 40.0 / 100.0 + 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace kincal::plan_internal
