@@ -13,6 +13,9 @@ namespace {
 using plan_internal::Values;
 
 constexpr double kNonlinearMargin = 1.2;
+constexpr double kCheckS = 0.05;      // how often the fleet is checked (s)
+constexpr double kSettleS = 3.0;      // a stop is followed this long beyond its slewing (s)
+constexpr double kAnticipateS = 1.0;  // the most negative delay driven exactly (s)
 
 // The robots that must stay in: the design point and +-k sigma along each principal axis
 // of the prior.
@@ -65,18 +68,23 @@ bool FleetInside(const System& sys, const Workspace& ws, const Fleet& f) {
   return true;
 }
 
-// Drives the fleet to t1 (checking every `check_s`); false if any target leaves.
+// Drives the fleet to t1, checking every `check_s`; false if any target left (with
+// `stop_early`, as soon as one does, leaving the fleet there).
 bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, double t1,
-                double check_s, Fleet* f) {
+                double check_s, bool stop_early, Fleet* f) {
+  bool inside = true;
   while (f->t_s < t1 - 1e-12) {
     const double t = std::min(t1, f->t_s + check_s);
     for (auto& x : f->x) {
       sys.Propagate(x.data(), x.data(), f->t_s, t, u, static_cast<const double*>(nullptr));
     }
     f->t_s = t;
-    if (!FleetInside(sys, ws, *f)) return false;
+    if (!FleetInside(sys, ws, *f)) {
+      inside = false;
+      if (stop_early) return false;
+    }
   }
-  return true;
+  return inside;
 }
 
 // The candidate controls: a grid of `levels` values over each channel's limits.
@@ -126,11 +134,14 @@ double TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o
   const double t1 = t0 + o.segment_s;
   plan_internal::AppendSlewed(&u, t0, t1, cand, o, &at);
   const Values end = at;
+  // The stop after it: until every robot within the prior has come to rest (a lag or a
+  // delay at the prior's 3 sigma keeps one moving for a while).
   ControlSignal braked = u;
   Values b = at;
-  plan_internal::AppendSlewed(&braked, t1, t1 + o.segment_s + 1.0, Values{}, o, &b);
+  const double settle = t1 + o.segment_s + kSettleS;
+  plan_internal::AppendSlewed(&braked, t1, settle, Values{}, o, &b);
   Fleet fleet = fleet0;
-  if (!DriveFleet(sys, braked, ws, t1 + o.segment_s + 1.0, 0.05, &fleet)) {
+  if (!DriveFleet(sys, braked, ws, settle, kCheckS, true, &fleet)) {
     return std::numeric_limits<double>::infinity();
   }
   DesignInformation info = info0;
@@ -260,7 +271,11 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     plan->controls = std::move(best_u);
     now = best_end;
     info = std::move(best_info);
-    DriveFleet(sys, plan->controls, ws, t0 + o.segment_s, 0.05, &fleet);
+    // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
+    // camera clock behind the robot's) moves by commands not yet chosen, and is driven
+    // through them only when they are.
+    DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
+               false, &fleet);
     Record(info, &plan->curve);
   }
   plan->controls.Append(
