@@ -1,5 +1,6 @@
 // kincal plan: how to drive a robot to calibrate it fastest, against the usual motions.
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -9,6 +10,7 @@
 #include "kincal/analysis/analyze.h"
 #include "kincal/analysis/option_lists.h"
 #include "kincal/daemon/checkpoint.h"
+#include "kincal/plan/advice.h"
 #include "kincal/plan/plan_output.h"
 #include "kincal/plan/planner.h"
 #include "kincal/scenario.h"
@@ -24,7 +26,8 @@ struct PlanArgs {
       limits, targets, care, criterion = "targets", out;
   double pose_rate_hz = 15.0, duration_s = 60.0, rate_hz = 20.0, segment_s = 0.5,
          target_height_m = 0.1, margin_px = 10.0;
-  bool publish = false, no_plot = false;
+  bool publish = false, no_plot = false, advise = false;
+  double horizon_s = 3.0;
   std::string channel = "KINCAL_CONTROLS";
 };
 
@@ -171,6 +174,48 @@ PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
   return o;
 }
 
+// --advise: what to drive next from the estimate, and the time to the targets.
+int RunAdvice(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd& cov,
+              const PlanOptions& o, const PlanArgs& a) {
+  Advice adv;
+  if (const Status s = Advise(sys, p, cov, o, a.horizon_s, &adv); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
+  const auto& info = sys.params()[static_cast<size_t>(adv.worst)];
+  std::cout << "least determined: " << info.name << " (sigma " << adv.sigma_now[adv.worst] << " "
+            << info.unit << ", " << adv.worst_ratio << " x its target)\n"
+            << "next: " << adv.motion << " (sigma of " << info.name << " then "
+            << adv.sigma_after[adv.worst] << ")\n";
+  if (std::isfinite(adv.time_to_target_s)) {
+    std::cout << "predicted driving time to every target: " << adv.time_to_target_s << " s\n";
+  } else if (o.targets.size() > 0) {
+    std::cout << "predicted driving time to every target: more than 10 minutes\n";
+  }
+  nlohmann::json j;
+  j["parameter"] = info.name;
+  j["sigma"] = adv.sigma_now[adv.worst];
+  j["ratio_to_target"] = adv.worst_ratio;
+  j["motion"] = adv.motion;
+  j["controls"] =
+      std::vector<double>(adv.controls.begin(), adv.controls.begin() + sys.num_controls());
+  j["duration_s"] = adv.duration_s;
+  j["twist"] = {adv.twist.x(), adv.twist.y()};
+  j["time_to_target_s"] =
+      std::isfinite(adv.time_to_target_s) ? nlohmann::json(adv.time_to_target_s) : nlohmann::json();
+  std::vector<std::string> names;
+  for (const auto& pi : sys.params()) names.push_back(pi.name);
+  j["params"] = names;
+  j["sigma_now"] =
+      std::vector<double>(adv.sigma_now.data(), adv.sigma_now.data() + adv.sigma_now.size());
+  j["sigma_after"] =
+      std::vector<double>(adv.sigma_after.data(), adv.sigma_after.data() + adv.sigma_after.size());
+  std::error_code ec;
+  std::filesystem::create_directories(a.out, ec);
+  if (ec) throw std::runtime_error(a.out + ": cannot create the output directory: " + ec.message());
+  WriteOutput(a.out + "/advice.json", j.dump(1) + "\n", "advice");
+  return 0;
+}
+
 int Run(const PlanArgs& a) {
   if (!a.checkpoint.empty() && !a.report.empty()) {
     throw std::runtime_error("--checkpoint and --report: one prior at most");
@@ -187,6 +232,7 @@ int Run(const PlanArgs& a) {
   Eigen::VectorXd p;
   Eigen::MatrixXd prior;
   DesignPoint(*sys, a, &p, &prior);
+  if (a.advise) return RunAdvice(*sys, p, prior, OptionsFrom(*sys, a), a);
   const auto ws = WorkspaceFrom(a);
   const PlanOptions o = OptionsFrom(*sys, a);
   std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";
@@ -248,6 +294,10 @@ Command AddPlan(CLI::App& app) {
   app.add_option("--out", a->out, "output directory (plan.csv, plan.json, plan.png)")->required();
   app.add_flag("--no-plot", a->no_plot, "skip plan.png");
   app.add_flag("--publish", a->publish, "play the plan as kincal.controls_t on LCM, in real time");
+  app.add_flag("--advise", a->advise,
+               "instead of a plan: the least determined parameter, the motion to drive next "
+               "and the time to the targets (DIR/advice.json)");
+  app.add_option("--horizon", a->horizon_s, "--advise: seconds the advised motion is held");
   app.add_option("--channel", a->channel, "LCM channel for --publish");
   return [a] { return Run(*a); };
 }

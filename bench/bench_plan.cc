@@ -12,11 +12,10 @@ namespace {
 struct Reference {
   System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"});
   Eigen::VectorXd p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
-  Eigen::MatrixXd prior =
-      (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05)
-          .finished()
-          .cwiseAbs2()
-          .asDiagonal();
+  Eigen::MatrixXd prior = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05)
+                              .finished()
+                              .cwiseAbs2()
+                              .asDiagonal();
   std::unique_ptr<Workspace> ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
   PlanOptions o;
   Reference() {

@@ -87,32 +87,6 @@ bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, 
   return inside;
 }
 
-// The candidate controls: a grid of `levels` values over each channel's limits.
-std::vector<Values> CandidateGrid(const System& sys, const Eigen::VectorXd& params,
-                                  const PlanOptions& o) {
-  const int nc = sys.num_controls();
-  std::vector<Values> out(1, Values{});
-  for (int c = 0; c < nc; ++c) {
-    std::vector<Values> next;
-    for (const Values& base : out) {
-      for (int l = 0; l < o.levels; ++l) {
-        Values v = base;
-        v[static_cast<size_t>(c)] =
-            o.max_abs[static_cast<size_t>(c)] * (-1.0 + 2.0 * l / (o.levels - 1));
-        next.push_back(v);
-      }
-    }
-    out = std::move(next);
-  }
-  if (o.max_curvature > 0.0) {
-    std::erase_if(out, [&](const Values& v) {
-      const Eigen::Vector2d tw = plan_internal::TwistOf(sys, params, v);
-      return std::abs(tw.y()) > o.max_curvature * std::abs(tw.x()) + 1e-12;
-    });
-  }
-  return out;
-}
-
 Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
   return prior_cov.diagonal().cwiseSqrt();
 }
@@ -197,6 +171,31 @@ bool PlanOptions::IsValid(const System& sys, std::string* error) const {
   return info.IsValid(error);
 }
 
+std::vector<Values> CandidateControls(const System& sys, const Eigen::VectorXd& params,
+                                      const PlanOptions& o) {
+  const int nc = sys.num_controls();
+  std::vector<Values> out(1, Values{});
+  for (int c = 0; c < nc; ++c) {
+    std::vector<Values> next;
+    for (const Values& base : out) {
+      for (int l = 0; l < o.levels; ++l) {
+        Values v = base;
+        v[static_cast<size_t>(c)] =
+            o.max_abs[static_cast<size_t>(c)] * (-1.0 + 2.0 * l / (o.levels - 1));
+        next.push_back(v);
+      }
+    }
+    out = std::move(next);
+  }
+  if (o.max_curvature > 0.0) {
+    std::erase_if(out, [&](const Values& v) {
+      const Eigen::Vector2d tw = plan_internal::TwistOf(sys, params, v);
+      return std::abs(tw.y()) > o.max_curvature * std::abs(tw.x()) + 1e-12;
+    });
+  }
+  return out;
+}
+
 double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
                    const PlanOptions& o) {
   std::vector<int> idx = o.care;
@@ -239,7 +238,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   if (!ws.Contains(info.MeasuredPose())) {
     return Status::Error("plan: the target at the start pose is outside the " + ws.Describe());
   }
-  const std::vector<Values> grid = CandidateGrid(sys, params, o);
+  const std::vector<Values> grid = CandidateControls(sys, params, o);
   const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
   Values now{};
   Record(info, &plan->curve);

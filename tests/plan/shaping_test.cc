@@ -22,7 +22,8 @@ TEST(Shaping, TwistToControlsForEveryModel) {
     const Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(c.p.data(), c.p.size());
     PlanOptions o;
     o.max_abs = c.max_abs;
-    for (const auto& [v, w] : std::vector<std::pair<double, double>>{{0.3, 0.0}, {0.2, 0.4}, {-0.2, 0.3}}) {
+    for (const auto& [v, w] :
+         std::vector<std::pair<double, double>>{{0.3, 0.0}, {0.2, 0.4}, {-0.2, 0.3}}) {
       Values u{};
       ASSERT_TRUE(TwistToControls(sys, p, v, w, o, &u)) << c.model << " " << v << " " << w;
       const Eigen::Vector2d tw = TwistOf(sys, p, u);

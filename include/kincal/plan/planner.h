@@ -88,6 +88,12 @@ void EvaluateMotion(const System& sys, const Eigen::VectorXd& params,
                     const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                     double step_s, Motion* m);
 
+// The candidate controls: a grid of `levels` values over each channel's limits (without
+// those beyond the curvature limit at `params`).
+std::vector<ControlSignal::Values> CandidateControls(const System& sys,
+                                                     const Eigen::VectorXd& params,
+                                                     const PlanOptions& o);
+
 // Scaled score of a covariance (smaller is better).
 double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
                    const PlanOptions& o);
