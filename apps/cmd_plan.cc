@@ -121,34 +121,10 @@ PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
     const auto s = ParseNumbers(a.pose_sigma, 3, "--pose-sigma SX,SY,STHETA");
     o.info.pose_sigma = Eigen::Vector3d(s[0], s[1], s[2]);
   }
-  const auto lim = ParseMap(a.limits, "--limits");
-  const int nc = sys.num_controls();
-  o.max_abs.assign(static_cast<size_t>(nc), 0.0);
-  o.max_accel.assign(static_cast<size_t>(nc), 0.0);
-  for (const auto& [k, v] : lim) {
-    const int c = sys.model().ControlIndex(k);
-    if (c >= 0) {
-      o.max_abs[static_cast<size_t>(c)] = v;
-    } else if (k == "accel") {
-      for (double& x : o.max_accel) x = v;
-    } else if (k.starts_with("accel_") && sys.model().ControlIndex(k.substr(6)) >= 0) {
-      o.max_accel[static_cast<size_t>(sys.model().ControlIndex(k.substr(6)))] = v;
-    } else if (k == "curvature") {
-      o.max_curvature = v;
-    } else {
-      throw std::runtime_error("--limits: '" + k + "' is not a control of " +
-                               std::string(sys.model().name()) +
-                               ", accel, accel_<control> or curvature");
-    }
-  }
-  for (int c = 0; c < nc; ++c) {
-    if (o.max_abs[static_cast<size_t>(c)] == 0.0) {
-      std::string all;
-      for (const auto& ci : sys.model().controls()) all += (all.empty() ? "" : ", ") + ci.name;
-      throw std::runtime_error("--limits: " + sys.model().controls()[static_cast<size_t>(c)].name +
-                               "=.. missing (a limit for every control of " +
-                               std::string(sys.model().name()) + ": " + all + ")");
-    }
+  if (const Status s =
+          PlanLimitsFrom(sys, ParseMap(a.limits, "--limits"), ParseMap(a.targets, "--targets"), &o);
+      !s.ok()) {
+    throw std::runtime_error("--" + s.message());
   }
   if (a.criterion == "a") {
     o.criterion = DesignCriterion::kA;
@@ -158,16 +134,6 @@ PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
     o.criterion = DesignCriterion::kTargets;
   } else {
     throw std::runtime_error("--criterion: a, d or targets expected, not '" + a.criterion + "'");
-  }
-  const auto targets = ParseMap(a.targets, "--targets");
-  if (!targets.empty()) o.targets = Eigen::VectorXd::Zero(sys.num_params());
-  for (const auto& [k, v] : targets) {
-    const int i = sys.ParamIndex(k);
-    if (i < 0 || !(v > 0.0))
-      throw std::runtime_error("--targets: '" + k +
-                               "' is not a parameter of this system, or its sigma is not > 0");
-    o.targets[i] = v;
-    o.care.push_back(i);
   }
   std::string error;
   if (!o.IsValid(sys, &error)) throw std::runtime_error(error);

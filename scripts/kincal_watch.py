@@ -1,12 +1,14 @@
 #!/usr/bin/env python3
-"""Watch a running kincald over LCM: parameters with +-sigma, model check and health.
+"""Watch a running kincald over LCM: parameters with +-sigma, model check, health, guidance.
 
     kincal_watch.py [--url URL] [--plot] [--timeout S] [--until-converged]
                     [--expect NAME=VALUE ...] [--lcm-types DIR]
     kincal_watch.py --log FILE.lcm [--png OUT.png] [--expect NAME=VALUE ...]
 
 Prints one line per second with every parameter as value +- 1 sigma and the filter's
-status, plus any health problem or model-check suspicion as it arrives. --plot opens a
+status, plus any health problem or model-check suspicion as it arrives, and each piece
+of guidance (guidance.enabled): the least determined parameter, the motion to drive next
+and the predicted driving time to the targets. --plot opens a
 live matplotlib window with each parameter and its +-2 sigma band. --expect checks, when
 the watch ends, that each named parameter lies within 3 sigma of the given value (exit
 status 1 if not), which makes the script usable as an end-to-end test. --log reads the
@@ -28,10 +30,10 @@ def import_types(path):
 
     use_lcm_types(path)
     try:
-        from kincal import health_t, model_check_t, params_t  # noqa: F401
+        from kincal import guidance_t, health_t, model_check_t, params_t  # noqa: F401
     except ImportError as e:
         sys.exit(f"kincal_watch: cannot import the kincal LCM types ({e}); pass --lcm-types DIR")
-    return params_t, health_t, model_check_t
+    return params_t, health_t, model_check_t, guidance_t
 
 
 STATUS = {0: "initializing", 1: "converging", 2: "converged", 3: "DIVERGED"}
@@ -43,6 +45,7 @@ def main():
     ap.add_argument("--params-channel", default="KINCAL_PARAMS")
     ap.add_argument("--health-channel", default="KINCAL_HEALTH")
     ap.add_argument("--model-check-channel", default="KINCAL_MODEL_CHECK")
+    ap.add_argument("--guidance-channel", default="KINCAL_GUIDANCE")
     ap.add_argument("--lcm-types", default="", help="directory holding the generated 'kincal' package")
     ap.add_argument("--plot", action="store_true", help="live plot with +-2 sigma bands (matplotlib)")
     ap.add_argument("--timeout", type=float, default=0.0, help="stop after S seconds (0: never)")
@@ -58,7 +61,7 @@ def main():
         import lcm
     except ImportError:
         sys.exit("kincal_watch: LCM's Python bindings are missing (pip install lcm, or scripts/setup's .venv)")
-    params_t, health_t, model_check_t = import_types(args.lcm_types)
+    params_t, health_t, model_check_t, guidance_t = import_types(args.lcm_types)
 
     expect = {}
     for e in args.expect:
@@ -106,8 +109,15 @@ def main():
             print(f"model check: residuals suggest '{c.suspected_effect}' (confidence {c.confidence:.2f}): "
                   f"{c.evidence}", flush=True)
 
+    def on_guidance(_channel, data):
+        try:
+            g = guidance_t.decode(data)
+        except Exception:
+            return
+        print(f"guidance: {describe_guidance(g)}", flush=True)
+
     handlers = {args.params_channel: on_params, args.health_channel: on_health,
-                 args.model_check_channel: on_check}
+                 args.model_check_channel: on_check, args.guidance_channel: on_guidance}
     if args.log:
         try:
             log = lcm.EventLog(args.log, "r")
@@ -147,6 +157,18 @@ def main():
             last_draw = now
             draw(fig, lines, m, state["history"])
     return finish(args, state, expect)
+
+
+def describe_guidance(g):
+    """One line for a kincal.guidance_t."""
+    if g.time_to_target_s < 0:
+        left = ""
+    elif g.time_to_target_s >= 1e9:
+        left = "; more than 10 minutes of driving to the targets"
+    else:
+        left = f"; about {g.time_to_target_s:.3g} s of driving to the targets"
+    return (f"{g.parameter} is least determined (sigma {g.sigma:.3g}, target {g.target:.3g}): "
+            f"{g.motion} (then sigma {g.sigma_after:.3g}){left}")
 
 
 def finish(args, state, expect):

@@ -163,6 +163,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("params_channel", &c.lcm.params_channel);
     s.Get("health_channel", &c.lcm.health_channel);
     s.Get("model_check_channel", &c.lcm.model_check_channel);
+    s.Get("guidance_channel", &c.lcm.guidance_channel);
     s.Get("markers_channel", &c.lcm.markers_channel);
     s.Get("frame_channel", &c.lcm.frame_channel);
     s.Get("publish_frames", &c.lcm.publish_frames);
@@ -296,6 +297,17 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("path", &c.checkpoint.path);
     s.Get("every_s", &c.checkpoint.every_s);
     s.Get("resume", &c.checkpoint.resume);
+    s.CheckUnknown();
+  }
+  {
+    auto s = top.Sub("guidance");
+    s.Get("enabled", &c.guidance.enabled);
+    s.Get("every_s", &c.guidance.every_s);
+    s.Get("horizon_s", &c.guidance.horizon_s);
+    s.Get("limits", &c.guidance.limits);
+    s.Get("targets", &c.guidance.targets);
+    s.Get("pose_sigma", &c.guidance.pose_sigma);
+    s.Get("pose_rate_hz", &c.guidance.pose_rate_hz);
     s.CheckUnknown();
   }
   top.CheckUnknown();

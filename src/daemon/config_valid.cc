@@ -6,6 +6,7 @@
 #include "kincal/daemon/config.h"
 #include "kincal/estimation/filter.h"
 #include "kincal/model.h"
+#include "kincal/plan/planner.h"
 #include "kincal/system.h"
 
 namespace kincal::daemon {
@@ -18,11 +19,25 @@ bool Expect(bool ok, const std::string& what, std::string* error) {
   return ok;
 }
 
+// guidance.limits and guidance.targets name the robot's controls and parameters.
+bool GuidanceFitsTheRobot(const DaemonConfig& c, std::string* error) {
+  if (!c.guidance.enabled) return true;
+  std::unique_ptr<System> sys;
+  if (!MakeSystem(c.robot.model, c.robot.effects, {}, &sys).ok()) return true;  // robot's error
+  PlanOptions o;
+  if (const Status s = PlanLimitsFrom(*sys, c.guidance.limits, c.guidance.targets, &o); !s.ok()) {
+    *error = "guidance." + s.message();
+    return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 bool LcmOptions::IsValid(std::string* error) const {
-  for (const auto* ch : {&controls_channel, &pose_channel, &params_channel, &health_channel,
-                         &model_check_channel, &markers_channel, &frame_channel}) {
+  for (const auto* ch :
+       {&controls_channel, &pose_channel, &params_channel, &health_channel, &model_check_channel,
+        &markers_channel, &frame_channel, &guidance_channel}) {
     if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
                 error)) {
       return false;
@@ -148,6 +163,19 @@ bool CheckpointOptions::IsValid(std::string* error) const {
   return Expect(every_s > 0, "checkpoint.every_s must be > 0", error);
 }
 
+bool GuidanceOptions::IsValid(std::string* error) const {
+  if (!enabled) return true;
+  if (!Expect(every_s > 0 && horizon_s > 0 && horizon_s <= 60,
+              "guidance.every_s must be > 0 and guidance.horizon_s in (0, 60]", error) ||
+      !Expect(pose_sigma.size() == 3 && pose_sigma[0] > 0 && pose_sigma[1] > 0 && pose_sigma[2] > 0,
+              "guidance.pose_sigma needs 3 positive values (m, m, rad)", error) ||
+      !Expect(pose_rate_hz > 0 && pose_rate_hz <= 1000,
+              "guidance.pose_rate_hz must be in (0, 1000]", error)) {
+    return false;
+  }
+  return true;
+}
+
 bool DaemonConfig::IsValid(std::string* error) const {
   if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
       !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
@@ -194,7 +222,11 @@ bool DaemonConfig::IsValid(std::string* error) const {
       return false;
     }
   }
-  return queues.IsValid(error) && record.IsValid(error) && checkpoint.IsValid(error);
+  if (!queues.IsValid(error) || !record.IsValid(error) || !checkpoint.IsValid(error) ||
+      !guidance.IsValid(error)) {
+    return false;
+  }
+  return GuidanceFitsTheRobot(*this, error);
 }
 
 void Validate(const DaemonConfig& c) {

@@ -19,6 +19,7 @@
 #include "daemon/counters.h"
 #include "daemon/detection_stage.h"
 #include "daemon/filter_stage.h"
+#include "daemon/guidance.h"
 #include "daemon/health.h"
 #include "daemon/path_lock.h"
 #include "daemon/pose_control_merge.h"
@@ -78,7 +79,8 @@ struct Daemon::Impl {
   std::optional<Checkpoint> resume;
   PathLock record_lock, checkpoint_lock;  // held for the daemon's life
   HealthReporter health;
-  std::string logged_health;  // main thread only
+  std::unique_ptr<Guidance> guidance;  // guidance.enabled; after `out`: stopped before it
+  std::string logged_health;           // main thread only
   TimeNs logged_health_at = 0;
 
   explicit Impl(DaemonConfig c)
@@ -106,7 +108,14 @@ struct Daemon::Impl {
         detection(&pose_stage,
                   DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,
                                    cfg.lcm.publish_markers, cfg.pose.sigma_px},
-                  &out, &frame_q, &pose_q, &counters) {}
+                  &out, &frame_q, &pose_q, &counters) {
+    if (cfg.guidance.enabled) {
+      guidance = std::make_unique<Guidance>(cfg.guidance,
+                                            [this](int64_t utime, const kincal::guidance_t& m) {
+                                              out.Publish(cfg.lcm.guidance_channel, utime, m);
+                                            });
+    }
+  }
 
   // Live: fresh data matters more than old (drop the oldest); lossless: block.
   FullPolicy QueuePolicy() const {
@@ -148,8 +157,11 @@ struct Daemon::Impl {
       out.Publish(cfg.lcm.model_check_channel, utime, m);
     };
     o.estimate = [this](const Checkpoint& ck) {
-      std::lock_guard lock(status_mu);
-      estimate = ck;
+      {
+        std::lock_guard lock(status_mu);
+        estimate = ck;
+      }
+      if (guidance) guidance->Offer(ck);
     };
     o.checkpoint_due = [this] { WriteCheckpointLogged(); };
     return o;
@@ -359,6 +371,7 @@ int Daemon::Run() {
   detection.join();
   filter.join();
   lcm_thread.join();
+  if (d.guidance) d.guidance->Drain();  // the last advice into the log
   d.source->Stop();
   d.PublishHealth(period.count());
   d.out.CloseLog();

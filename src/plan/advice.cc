@@ -72,15 +72,15 @@ std::string DescribeMotion(const Eigen::Vector2d& tw, double seconds) {
   if (std::abs(v) < kStillSpeed && std::abs(w) < kStillTurn) {
     std::snprintf(buf, sizeof buf, "stand still for %.3g s", seconds);
   } else if (std::abs(v) < kStillSpeed) {
-    std::snprintf(buf, sizeof buf, "turn in place %s at %.2f rad/s for %.3g s", side,
-                  std::abs(w), seconds);
+    std::snprintf(buf, sizeof buf, "turn in place %s at %.2f rad/s for %.3g s", side, std::abs(w),
+                  seconds);
   } else if (std::abs(w) < kStillTurn) {
     std::snprintf(buf, sizeof buf, "drive %s at %.2f m/s for %.3g s",
                   v > 0.0 ? "forward" : "backward", std::abs(v), seconds);
   } else {
-    std::snprintf(buf, sizeof buf, "drive %s at %.2f m/s turning %s at %.2f rad/s (radius %.2f m) for %.3g s",
-                  v > 0.0 ? "forward" : "backward", std::abs(v), side, std::abs(w),
-                  std::abs(v / w), seconds);
+    std::snprintf(
+        buf, sizeof buf, "drive %s at %.2f m/s turning %s at %.2f rad/s (radius %.2f m) for %.3g s",
+        v > 0.0 ? "forward" : "backward", std::abs(v), side, std::abs(w), std::abs(v / w), seconds);
   }
   return buf;
 }

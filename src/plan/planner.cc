@@ -196,6 +196,51 @@ std::vector<Values> CandidateControls(const System& sys, const Eigen::VectorXd& 
   return out;
 }
 
+Status PlanLimitsFrom(const System& sys, const std::map<std::string, double>& limits,
+                      const std::map<std::string, double>& targets, PlanOptions* o) {
+  const KinematicModel& model = sys.model();
+  const size_t nc = static_cast<size_t>(sys.num_controls());
+  o->max_abs.assign(nc, 0.0);
+  o->max_accel.assign(nc, 0.0);
+  for (const auto& [k, v] : limits) {
+    const int c = model.ControlIndex(k);
+    if (c >= 0) {
+      o->max_abs[static_cast<size_t>(c)] = v;
+    } else if (k == "accel") {
+      for (double& x : o->max_accel) x = v;
+    } else if (k.starts_with("accel_") && model.ControlIndex(k.substr(6)) >= 0) {
+      o->max_accel[static_cast<size_t>(model.ControlIndex(k.substr(6)))] = v;
+    } else if (k == "curvature") {
+      o->max_curvature = v;
+    } else {
+      return Status::Error("limits: '" + k + "' is not a control of " + std::string(model.name()) +
+                           ", accel, accel_<control> or curvature");
+    }
+  }
+  std::string all;
+  for (const auto& ci : model.controls()) all += (all.empty() ? "" : ", ") + ci.name;
+  for (size_t c = 0; c < nc; ++c) {
+    if (o->max_abs[c] == 0.0) {
+      return Status::Error("limits: " + model.controls()[c].name +
+                           "=.. missing (a limit for every control of " +
+                           std::string(model.name()) + ": " + all + ")");
+    }
+  }
+  o->targets = Eigen::VectorXd();
+  o->care.clear();
+  if (!targets.empty()) o->targets = Eigen::VectorXd::Zero(sys.num_params());
+  for (const auto& [k, v] : targets) {
+    const int i = sys.ParamIndex(k);
+    if (i < 0 || !(v > 0.0)) {
+      return Status::Error("targets: '" + k +
+                           "' is not a parameter of this system, or its sigma is not > 0");
+    }
+    o->targets[i] = v;
+    o->care.push_back(i);
+  }
+  return Status{};
+}
+
 double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
                    const PlanOptions& o) {
   std::vector<int> idx = o.care;

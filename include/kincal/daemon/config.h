@@ -36,6 +36,7 @@ struct LcmOptions {
   std::string params_channel = "KINCAL_PARAMS";
   std::string health_channel = "KINCAL_HEALTH";
   std::string model_check_channel = "KINCAL_MODEL_CHECK";
+  std::string guidance_channel = "KINCAL_GUIDANCE";
   std::string markers_channel = "KINCAL_MARKERS";
   std::string frame_channel = "KINCAL_FRAME";
   bool publish_frames = false;  // frames go to the log; on the network only if asked
@@ -174,6 +175,24 @@ struct CheckpointOptions {
   bool IsValid(std::string* error) const;
 };
 
+// Online guidance: every every_s of data time the running estimate is handed to a worker
+// thread that answers what `kincal plan --advise` answers (kincal/plan/advice.h) and
+// publishes it as kincal.guidance_t on lcm.guidance_channel.
+struct GuidanceOptions {
+  bool enabled = false;
+  double every_s = 5.0;    // data time between pieces of advice
+  double horizon_s = 3.0;  // how long the advised motion is held
+  // <control>: max |command|, accel / accel_<control>: per second, curvature: 1/m (as
+  // `kincal plan --limits`); every control needs one when enabled.
+  std::map<std::string, double> limits;
+  // <parameter>: target sigma (as `kincal plan --targets`); empty: every parameter, scored
+  // against its current sigma, and no time to target.
+  std::map<std::string, double> targets;
+  std::vector<double> pose_sigma = {0.002, 0.002, 0.005};  // m, m, rad
+  double pose_rate_hz = 15.0;
+  bool IsValid(std::string* error) const;
+};
+
 struct DaemonConfig {
   std::string file;  // where it was read from ("" for defaults)
   SourceKind source = SourceKind::kSim;
@@ -191,6 +210,7 @@ struct DaemonConfig {
   QueueOptions queues;
   RecordOptions record;
   CheckpointOptions checkpoint;
+  GuidanceOptions guidance;
   double health_rate_hz = 1.0;
   double no_target_warn_s = 5.0;  // health is not ok after this long (frame time) without target
   // Every section, then what ties sections together; false with *error naming the

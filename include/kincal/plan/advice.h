@@ -15,8 +15,8 @@
 namespace kincal {
 
 struct Advice {
-  int worst = -1;            // the scored parameter with the largest sigma / target
-  double worst_ratio = 0.0;  // its sigma over its target (or its prior sigma)
+  int worst = -1;                    // the scored parameter with the largest sigma / target
+  double worst_ratio = 0.0;          // its sigma over its target (or its prior sigma)
   ControlSignal::Values controls{};  // the motion to drive, held for duration_s
   double duration_s = 0.0;
   Eigen::Vector2d twist = Eigen::Vector2d::Zero();  // (v m/s, omega rad/s) at the estimate

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -47,6 +48,13 @@ struct PlanOptions {
   DesignInformationOptions info;
   bool IsValid(const System& sys, std::string* error) const;
 };
+
+// Fills o's limits and targets from name=value maps, as `kincal plan --limits/--targets`
+// and kincald's guidance section give them: <control>=max |u|, accel=.. (every channel,
+// units per second), accel_<control>=.., curvature=.. (1/m); <parameter>=target sigma (the
+// parameters named are the ones scored). An error names the key and what was expected.
+Status PlanLimitsFrom(const System& sys, const std::map<std::string, double>& limits,
+                      const std::map<std::string, double>& targets, PlanOptions* o);
 
 // Predicted sigma of every parameter against driving time.
 struct SigmaCurve {
