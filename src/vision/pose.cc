@@ -226,13 +226,18 @@ Eigen::Vector3d FloorPoseOf(const FloorExtrinsics& floor, const Pose3& pose) {
   return {o.x(), o.y(), std::atan2(Rft(1, 0), Rft(0, 0))};
 }
 
-PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& lowe) {
+namespace {
+
+// A Lowe solve on the floor at `xy`, whose derivative with respect to the solved
+// translation is `dxy_dt`; the heading moves with the floor-z component of the rotation.
+PlanarPose OnFloor(const FloorExtrinsics& floor, const LoweResult& lowe, const Eigen::Vector2d& xy,
+                   const Eigen::Matrix<double, 2, 3>& dxy_dt) {
   PlanarPose out;
-  const Eigen::Matrix3d Rfc = floor.R_cf.transpose();
   out.xytheta = FloorPoseOf(floor, lowe.pose);
+  out.xytheta.head<2>() = xy;
   Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
-  J.block<2, 3>(0, 0) = Rfc.topRows<2>();
-  J.block<1, 3>(2, 3) = Rfc.row(2);
+  J.block<2, 3>(0, 0) = dxy_dt;
+  J.block<1, 3>(2, 3) = floor.R_cf.col(2).transpose();
   out.covariance = J * lowe.covariance * J.transpose();
   out.rms_px = lowe.rms_px;
   out.iterations = lowe.iterations;
@@ -240,27 +245,29 @@ PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& low
   return out;
 }
 
+}  // namespace
+
+PlanarPose FloorPoseFromLowe(const FloorExtrinsics& floor, const LoweResult& lowe) {
+  const Eigen::Matrix3d Rfc = floor.R_cf.transpose();
+  return OnFloor(floor, lowe, (Rfc * (lowe.pose.t - floor.t_cf)).head<2>(), Rfc.topRows<2>());
+}
+
 PlanarPose FloorPoseFromLoweAtHeight(const FloorExtrinsics& floor, const LoweResult& lowe,
                                      double target_height_m) {
-  PlanarPose out = FloorPoseFromLowe(floor, lowe);
   const Eigen::Matrix3d Rfc = floor.R_cf.transpose();
   const Eigen::Vector3d centre = -Rfc * floor.t_cf;  // the camera in floor coordinates
   const Eigen::Vector3d d = Rfc * lowe.pose.t;       // line of sight to the target's origin
   const double drop = target_height_m - centre.z();
   if (!(d.z() < 0.0 && drop < 0.0)) {
+    PlanarPose out = FloorPoseFromLowe(floor, lowe);
     out.ok = false;
     return out;
   }
   const double s = drop / d.z();
-  out.xytheta.head<2>() = centre.head<2>() + s * d.head<2>();
   // d(xy)/d(d) = s [I | -d_xy / d_z]; d(d)/d(t) = Rfc.
   Eigen::Matrix<double, 2, 3> dxy_dd;
   dxy_dd << s, 0.0, -s * d.x() / d.z(), 0.0, s, -s * d.y() / d.z();
-  Eigen::Matrix<double, 3, 6> J = Eigen::Matrix<double, 3, 6>::Zero();
-  J.block<2, 3>(0, 0) = dxy_dd * Rfc;
-  J.block<1, 3>(2, 3) = Rfc.row(2);
-  out.covariance = J * lowe.covariance * J.transpose();
-  return out;
+  return OnFloor(floor, lowe, centre.head<2>() + s * d.head<2>(), dxy_dd * Rfc);
 }
 
 Pose3 CameraPoseOnFloor(const FloorExtrinsics& floor, const Eigen::Vector3d& xytheta,
