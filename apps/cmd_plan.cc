@@ -205,7 +205,6 @@ int Run(const PlanArgs& a) {
   Motion plan;
   if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan); !s.ok())
     throw std::runtime_error(s.message());
-  EvaluateMotion(*sys, p, prior, *ws, o, kCurveStepS, &plan);
   std::vector<Motion> usual = UsualMotions(*sys, p, prior, *ws, o);
   PrintPlanSummary(*sys, o, plan, usual, std::cout);
   if (const Status s = WritePlanFiles(a.out, *sys, p, prior, o, plan, usual); !s.ok()) {

@@ -33,7 +33,6 @@ void BM_Plan60s(benchmark::State& state) {
     Motion plan;
     const Status s = PlanMotion(r.sys, r.p, r.prior, *r.ws, r.o, &plan);
     if (!s.ok()) state.SkipWithError(s.message().c_str());
-    EvaluateMotion(r.sys, r.p, r.prior, *r.ws, r.o, kCurveStepS, &plan);
     benchmark::DoNotOptimize(plan.curve.time_to_target_s);
   }
   state.counters["plan_seconds"] = r.o.duration_s;

@@ -30,11 +30,7 @@ Eigen::VectorXd Scales(const Eigen::MatrixXd& cov, const PlanOptions& o) {
 // The worst scored parameter: largest sigma over its target.
 void FindWorst(const Eigen::VectorXd& sigma, const Eigen::VectorXd& scale, const PlanOptions& o,
                Advice* a) {
-  std::vector<int> idx = o.care;
-  if (idx.empty()) {
-    for (int i = 0; i < sigma.size(); ++i) idx.push_back(i);
-  }
-  for (int i : idx) {
+  for (int i : ScoredParams(o, static_cast<int>(sigma.size()))) {
     const double r = sigma[i] / scale[i];
     if (r > a->worst_ratio) {
       a->worst_ratio = r;
@@ -54,7 +50,6 @@ double TimeToTargets(const System& sys, const Eigen::VectorXd& p, Eigen::MatrixX
   for (double done = 0.0; done < kMaxPredictS; done += kPredictChunkS) {
     Motion m;
     if (!PlanMotion(sys, p, cov, *floor, o, &m).ok()) break;
-    EvaluateMotion(sys, p, cov, *floor, o, kCurveStepS, &m);
     if (!m.curve.extrapolated && std::isfinite(m.curve.time_to_target_s)) {
       return done + m.curve.time_to_target_s;
     }

@@ -3,6 +3,8 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <limits>
+#include <numeric>
+#include <optional>
 
 #include "kincal/angles.h"
 #include "plan/shaping.h"
@@ -91,23 +93,24 @@ Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
   return prior_cov.diagonal().cwiseSqrt();
 }
 
-void Record(const DesignInformation& info, SigmaCurve* c) {
-  c->t_s.push_back(info.time_s());
-  c->sigma.push_back(info.Covariance().diagonal().cwiseSqrt());
-}
+// One candidate driven for a segment: its controls, where they end, what is then known.
+struct Trial {
+  double score;
+  ControlSignal u;
+  Values end;
+  DesignInformation info;
+};
 
-// Tries one candidate: drives it for a segment and a stop after it. Returns its score, or
-// +inf when a robot within the prior would leave the workspace.
-double TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
-                    const Eigen::VectorXd& prior_sigma, const Values& cand, double t0,
-                    const ControlSignal& u0, const Values& now, const DesignInformation& info0,
-                    const Fleet& fleet0, ControlSignal* u_out, Values* end_out,
-                    DesignInformation* info_out) {
+// Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
+// within the prior would leave the workspace.
+std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
+                                  const Eigen::VectorXd& prior_sigma, const Values& cand, double t0,
+                                  const ControlSignal& u0, const Values& now,
+                                  const DesignInformation& info0, const Fleet& fleet0) {
   ControlSignal u = u0;
   Values at = now;
   const double t1 = t0 + o.segment_s;
   plan_internal::AppendSlewed(&u, t0, t1, cand, o, &at);
-  const Values end = at;
   // The stop after it: until every robot within the prior has come to rest (a lag or a
   // delay at the prior's 3 sigma keeps one moving for a while).
   ControlSignal braked = u;
@@ -115,16 +118,11 @@ double TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o
   const double settle = t1 + o.segment_s + kSettleS;
   plan_internal::AppendSlewed(&braked, t1, settle, Values{}, o, &b);
   Fleet fleet = fleet0;
-  if (!DriveFleet(sys, braked, ws, settle, kCheckS, true, &fleet)) {
-    return std::numeric_limits<double>::infinity();
-  }
+  if (!DriveFleet(sys, braked, ws, settle, kCheckS, true, &fleet)) return std::nullopt;
   DesignInformation info = info0;
   info.Advance(t1, u);
   const double score = DesignScore(info.Covariance(), prior_sigma, o);
-  *u_out = std::move(u);
-  *end_out = end;
-  *info_out = std::move(info);
-  return score;
+  return Trial{score, std::move(u), at, std::move(info)};
 }
 
 }  // namespace
@@ -241,12 +239,16 @@ Status PlanLimitsFrom(const System& sys, const std::map<std::string, double>& li
   return Status{};
 }
 
+std::vector<int> ScoredParams(const PlanOptions& o, int num_params) {
+  if (!o.care.empty()) return o.care;
+  std::vector<int> all(static_cast<size_t>(num_params));
+  std::iota(all.begin(), all.end(), 0);
+  return all;
+}
+
 double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
                    const PlanOptions& o) {
-  std::vector<int> idx = o.care;
-  if (idx.empty()) {
-    for (int i = 0; i < cov.rows(); ++i) idx.push_back(i);
-  }
+  const std::vector<int> idx = ScoredParams(o, static_cast<int>(cov.rows()));
   const int n = static_cast<int>(idx.size());
   Eigen::MatrixXd c(n, n);
   for (int a = 0; a < n; ++a) {
@@ -273,7 +275,6 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   plan->name = "plan";
   plan->controls = ControlSignal(sys.num_controls(), 0);
   plan->segment_starts_s = {0.0};
-  plan->curve = SigmaCurve{};
   DesignInformation info(sys, params, prior_cov, o.info);
   info.StartSegment(start, 0.0, plan->controls);
   Fleet fleet;
@@ -286,45 +287,31 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   const std::vector<Values> grid = CandidateControls(sys, params, o);
   const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
   Values now{};
-  Record(info, &plan->curve);
   const int segments = static_cast<int>(std::ceil(o.duration_s / o.segment_s - 1e-9));
   for (int s = 0; s < segments; ++s) {
     const double t0 = s * o.segment_s;
-    double best = std::numeric_limits<double>::infinity();
-    ControlSignal best_u;
-    Values best_end{};
-    DesignInformation best_info = info;
+    std::optional<Trial> best;
     for (const Values& cand : grid) {
-      ControlSignal u;
-      Values end{};
-      DesignInformation ci = info;
-      const double score = TryCandidate(sys, ws, o, prior_sigma, cand, t0, plan->controls, now,
-                                        info, fleet, &u, &end, &ci);
-      if (score < best) {
-        best = score;
-        best_u = std::move(u);
-        best_end = end;
-        best_info = std::move(ci);
-      }
+      std::optional<Trial> t =
+          TryCandidate(sys, ws, o, prior_sigma, cand, t0, plan->controls, now, info, fleet);
+      if (t && (!best || t->score < best->score)) best = std::move(t);
     }
-    if (!std::isfinite(best)) {
+    if (!best) {
       return Status::Error("plan: no control keeps every robot within the prior inside the " +
                            ws.Describe() + " after " + std::to_string(t0) +
                            " s; widen the workspace or lower the speed limits");
     }
-    plan->controls = std::move(best_u);
-    now = best_end;
-    info = std::move(best_info);
+    plan->controls = std::move(best->u);
+    now = best->end;
+    info = std::move(best->info);
     // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
     // camera clock behind the robot's) moves by commands not yet chosen, and is driven
     // through them only when they are.
     DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
                false, &fleet);
-    Record(info, &plan->curve);
   }
-  plan->controls.Append(
-      plan->controls.ToNs(segments * o.segment_s),
-      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  plan_internal::AppendRest(&plan->controls, segments * o.segment_s);
+  EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
   return Status{};
 }
 

@@ -33,6 +33,12 @@ void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values&
   }
 }
 
+void AppendRest(ControlSignal* signal, double t_s) {
+  const Values zero{};
+  signal->Append(signal->ToNs(t_s),
+                 std::span<const double>(zero.data(), static_cast<size_t>(signal->num_channels())));
+}
+
 Eigen::Vector2d TwistOf(const System& sys, const Eigen::VectorXd& params, const Values& u) {
   const Twist<double> tw = sys.model().BodyTwist(params.data(), u.data());
   return {tw.vx, tw.omega};

@@ -19,6 +19,9 @@ using Values = ControlSignal::Values;
 void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values& to,
                   const PlanOptions& o, Values* u);
 
+// A sample of zeros at t_s: the robot stopped.
+void AppendRest(ControlSignal* signal, double t_s);
+
 // Controls within the limits whose body twist at `params` is (v, omega) as nearly as the
 // limits allow (least squares, Levenberg-Marquardt from a forward guess). Returns whether
 // the twist is reached to 1e-6 of its size.

@@ -21,53 +21,60 @@ struct Piece {
   double v, omega, seconds;
 };
 
+// The options with every limit cut to the headroom.
+PlanOptions WithHeadroom(const PlanOptions& o) {
+  PlanOptions tight = o;
+  for (double& m : tight.max_abs) m *= kHeadroom;
+  return tight;
+}
+
+// The largest x in [lo, hi] for which `fits(x)` holds, by bisection (`fits` true at lo).
+template <class Fits>
+double LargestFitting(double lo, double hi, int iterations, Fits fits) {
+  for (int it = 0; it < iterations; ++it) {
+    const double x = 0.5 * (lo + hi);
+    (fits(x) ? lo : hi) = x;
+  }
+  return lo;
+}
+
+// Whether twist (v, omega) has controls within the headroom of the limits.
+bool Drivable(const System& sys, const Eigen::VectorXd& p, const PlanOptions& tight, double v,
+              double omega) {
+  Values u{};
+  return plan_internal::TwistToControls(sys, p, v, omega, tight, &u);
+}
+
 // Fastest forward speed whose controls (and those of turning at radius r) fit within the
 // headroom of the limits.
 double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
                    double radius) {
-  double lo = 0.0, hi = 10.0;
-  for (int it = 0; it < 50; ++it) {
-    const double v = 0.5 * (lo + hi);
-    Values u{};
-    PlanOptions tight = o;
-    for (double& m : tight.max_abs) m *= kHeadroom;
-    const bool ok =
-        plan_internal::TwistToControls(sys, p, v, radius > 0.0 ? v / radius : 0.0, tight, &u);
-    (ok ? lo : hi) = v;
-  }
-  return lo;
+  const PlanOptions tight = WithHeadroom(o);
+  return LargestFitting(0.0, 10.0, 50, [&](double v) {
+    return Drivable(sys, p, tight, v, radius > 0.0 ? v / radius : 0.0);
+  });
 }
 
 // Fastest turn in place within the headroom, 0 when the robot cannot turn in place.
 double SpinRate(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o) {
   if (o.max_curvature > 0.0) return 0.0;
-  double lo = 0.0, hi = 50.0;
-  for (int it = 0; it < 50; ++it) {
-    const double w = 0.5 * (lo + hi);
-    Values u{};
-    PlanOptions tight = o;
-    for (double& m : tight.max_abs) m *= kHeadroom;
-    (plan_internal::TwistToControls(sys, p, 0.0, w, tight, &u) ? lo : hi) = w;
-  }
-  return lo > 1e-3 ? lo : 0.0;
+  const PlanOptions tight = WithHeadroom(o);
+  const double w =
+      LargestFitting(0.0, 50.0, 50, [&](double w) { return Drivable(sys, p, tight, 0.0, w); });
+  return w > 1e-3 ? w : 0.0;
 }
 
 // The tightest turn within the headroom at a tenth of the straight cruise speed (a
 // steered robot's steering limit); 0 when it turns in place.
 double MinTurnRadius(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
                      double straight_speed) {
-  PlanOptions tight = o;
-  for (double& m : tight.max_abs) m *= kHeadroom;
+  const PlanOptions tight = WithHeadroom(o);
   const double v = 0.1 * straight_speed;
-  Values u{};
-  double lo = 0.0, hi = 1e3;  // curvature, 1/m
-  for (int it = 0; it < 60; ++it) {
-    const double k = 0.5 * (lo + hi);
-    (plan_internal::TwistToControls(sys, p, v, v * k, tight, &u) ? lo : hi) = k;
-  }
+  const double k =  // curvature, 1/m
+      LargestFitting(0.0, 1e3, 60, [&](double k) { return Drivable(sys, p, tight, v, v * k); });
   // A tenth wider: at the steering limit itself the controls of faster turns are found
   // only at the edge of the box.
-  return lo >= 999.0 ? 0.0 : 1.1 / std::max(lo, 1e-9);
+  return k >= 999.0 ? 0.0 : 1.1 / std::max(k, 1e-9);
 }
 
 Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
@@ -85,9 +92,7 @@ Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions
     plan_internal::AppendSlewed(&m.controls, t, t1, to, o, &now);
     t = t1;
   }
-  m.controls.Append(
-      m.controls.ToNs(o.duration_s),
-      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  plan_internal::AppendRest(&m.controls, o.duration_s);
   return m;
 }
 
@@ -126,7 +131,6 @@ Motion ThesisRuns(const System& sys, const Eigen::VectorXd& p, const PlanOptions
   Motion m;
   m.controls = ControlSignal(sys.num_controls(), 0);
   std::vector<Eigen::Vector2d> twists;
-  double scale = std::numeric_limits<double>::infinity();
   for (const auto& w : kThesisControls) {
     const double v = 0.5 * (kThesisRL * w[0] + kThesisRR * w[1]);
     const double om = (kThesisRR * w[1] - kThesisRL * w[0]) / kThesisD;
@@ -137,19 +141,12 @@ Motion ThesisRuns(const System& sys, const Eigen::VectorXd& p, const PlanOptions
                                : "thesis runs (" + std::to_string(twists.size()) + " of 99)";
   if (twists.empty()) return m;
   // One common scale: the largest at which every run's controls fit the headroom.
-  double lo = 0.0, hi = 1.0;
-  for (int it = 0; it < 40; ++it) {
-    const double s = 0.5 * (lo + hi);
-    bool fits = true;
-    PlanOptions tight = o;
-    for (double& x : tight.max_abs) x *= kHeadroom;
-    for (const auto& tw : twists) {
-      Values u{};
-      fits = fits && plan_internal::TwistToControls(sys, p, s * tw.x(), s * tw.y(), tight, &u);
-    }
-    (fits ? lo : hi) = s;
-  }
-  scale = lo;
+  const PlanOptions tight = WithHeadroom(o);
+  const double scale = LargestFitting(0.0, 1.0, 40, [&](double s) {
+    return std::all_of(twists.begin(), twists.end(), [&](const Eigen::Vector2d& tw) {
+      return Drivable(sys, p, tight, s * tw.x(), s * tw.y());
+    });
+  });
   const double each = o.duration_s / static_cast<double>(twists.size());
   Values now{};
   double t = 0.0;
@@ -161,9 +158,7 @@ Motion ThesisRuns(const System& sys, const Eigen::VectorXd& p, const PlanOptions
     plan_internal::AppendSlewed(&m.controls, t, t + each, to, o, &now);
     t += each;
   }
-  m.controls.Append(
-      m.controls.ToNs(t),
-      std::span<const double>(Values{}.data(), static_cast<size_t>(sys.num_controls())));
+  plan_internal::AppendRest(&m.controls, t);
   return m;
 }
 
@@ -171,10 +166,7 @@ double TimeToTarget(const SigmaCurve& c, const Eigen::VectorXd& targets, const P
                     bool* extrapolated) {
   *extrapolated = false;
   if (targets.size() == 0 || c.t_s.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::vector<int> idx = o.care;
-  if (idx.empty()) {
-    for (int i = 0; i < targets.size(); ++i) idx.push_back(i);
-  }
+  const std::vector<int> idx = ScoredParams(o, static_cast<int>(targets.size()));
   for (size_t k = 0; k < c.t_s.size(); ++k) {
     bool met = true;
     for (int i : idx) met = met && (!(targets[i] > 0.0) || c.sigma[k][i] <= targets[i]);

@@ -28,7 +28,6 @@ TEST(PlanOutput, CsvReadsBackAndJsonHasEveryMotion) {
   const auto ws = MakeArena(-1.0, -1.0, 1.0, 1.0);
   Motion plan;
   ASSERT_TRUE(PlanMotion(sys, p, prior, *ws, o, &plan).ok());
-  EvaluateMotion(sys, p, prior, *ws, o, kCurveStepS, &plan);
   const std::vector<Motion> usual = UsualMotions(sys, p, prior, *ws, o);
 
   const fs::path dir = fs::temp_directory_path() / ("kincal_plan_" + std::to_string(::getpid()));

@@ -44,7 +44,6 @@ double SpeedUp(const Case& c, const Workspace& ws, const char* label) {
   Motion plan;
   const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan);
   EXPECT_TRUE(s.ok()) << s.message();
-  EvaluateMotion(c.sys, c.p, prior, ws, c.o, kCurveStepS, &plan);
   EXPECT_TRUE(plan.stays_in);
   double best = 1e300;
   std::string best_name;
@@ -151,7 +150,6 @@ TEST(Plan, RealisedSigmaIsThePredictedSigma) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion plan;
   ASSERT_TRUE(PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan).ok());
-  EvaluateMotion(c.sys, c.p, prior, *ws, c.o, kCurveStepS, &plan);
   const Eigen::VectorXd predicted = plan.curve.sigma.back();
   const Eigen::Vector3d sigma = c.o.info.pose_sigma;
   std::vector<TimeNs> times;
@@ -240,7 +238,6 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixels) {
   c.o.max_abs = {12.0, 12.0};
   const Status planned = PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan);
   ASSERT_TRUE(planned.ok()) << planned.message();
-  EvaluateMotion(c.sys, c.p, prior, *ws, c.o, kCurveStepS, &plan);
   const Eigen::VectorXd predicted = plan.curve.sigma.back();
   const Eigen::Vector2d centre = ws->Centre();
   std::vector<TimeNs> times;

@@ -76,7 +76,8 @@ struct Motion {
   double left_at_s = -1.0;            // first time it left the workspace (nominal), or -1
 };
 
-// The plan. `params` and `prior_cov` are the design point and its uncertainty.
+// The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
+// `prior_cov` are the design point and its uncertainty.
 Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                   Motion* plan);
@@ -101,6 +102,9 @@ void EvaluateMotion(const System& sys, const Eigen::VectorXd& params,
 std::vector<ControlSignal::Values> CandidateControls(const System& sys,
                                                      const Eigen::VectorXd& params,
                                                      const PlanOptions& o);
+
+// The parameters scored: o.care, or all `num_params` when it is empty.
+std::vector<int> ScoredParams(const PlanOptions& o, int num_params);
 
 // Scaled score of a covariance (smaller is better).
 double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigma,
