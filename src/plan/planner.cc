@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <limits>
 #include <numeric>
 #include <optional>
 
