@@ -448,9 +448,8 @@ void FilterStage::PublishModelCheck(TimeNs t) {
   last_check_ns_ = t;
   const int64_t utime = PipelineNsToUtime(t);
   const ModelCheckVerdict verdict = check_->Verdict();
-  std::string model(sys_->model().name());
-  for (const auto& e : effects_) model += "+" + e;
-  kincal::model_check_t m = ModelCheckMessage(verdict, model, utime);
+  kincal::model_check_t m =
+      ModelCheckMessage(verdict, ModelLabel(sys_->model().name(), effects_), utime);
   m.adaptive_noise = adapter_.level();
   if (verdict.suspected_effect.empty() && adapter_.level() > kInadequateNoiseLevel) {
     m.evidence = fmt::format(

@@ -1,47 +1,8 @@
 #include "daemon/guidance.h"
 
-#include <cmath>
-#include <map>
+#include "daemon/messages.h"
 
 namespace kincal::daemon {
-namespace {
-
-// guidance_t.time_to_target_s beyond what the advice predicts (10 minutes).
-constexpr double kBeyond = 1e9;
-
-}  // namespace
-
-void FillGuidanceMessage(const System& sys, const Advice& a, const PlanOptions& o, int64_t utime,
-                         kincal::guidance_t* m) {
-  m->schema_version = 1;
-  m->utime = utime;
-  m->model = std::string(sys.model().name());
-  for (const auto& e : sys.effects()) m->model += "+" + std::string(e->name());
-  const int n = sys.num_params();
-  m->parameter = a.worst >= 0 ? sys.params()[static_cast<size_t>(a.worst)].name : "";
-  m->sigma = a.worst >= 0 ? a.sigma_now[a.worst] : 0.0;
-  m->target = a.worst >= 0 && a.worst_ratio > 0.0 ? m->sigma / a.worst_ratio : 0.0;
-  m->sigma_after = a.worst >= 0 ? a.sigma_after[a.worst] : 0.0;
-  m->motion = a.motion;
-  m->duration_s = a.duration_s;
-  m->num_controls = sys.num_controls();
-  m->control_names.clear();
-  for (const auto& c : sys.model().controls()) m->control_names.push_back(c.name);
-  m->controls.assign(a.controls.begin(), a.controls.begin() + sys.num_controls());
-  m->time_to_target_s = std::isnan(a.time_to_target_s)   ? -1.0
-                        : std::isinf(a.time_to_target_s) ? kBeyond
-                                                         : a.time_to_target_s;
-  m->num_params = n;
-  m->names.clear();
-  m->sigmas.assign(static_cast<size_t>(n), 0.0);
-  m->targets.assign(static_cast<size_t>(n), 0.0);
-  for (int i = 0; i < n; ++i) {
-    m->names.push_back(sys.params()[static_cast<size_t>(i)].name);
-    m->sigmas[static_cast<size_t>(i)] = a.sigma_now[i];
-    if (o.targets.size() == n) m->targets[static_cast<size_t>(i)] = o.targets[i];
-  }
-}
-
 Guidance::Guidance(const GuidanceOptions& options, Publish publish)
     : opt_(options), publish_(std::move(publish)), thread_([this] { Loop(); }) {}
 
@@ -130,7 +91,7 @@ void Guidance::Advise(const Checkpoint& estimate) {
     return;
   }
   kincal::guidance_t m;
-  FillGuidanceMessage(*sys, a, o, estimate.utime, &m);
+  FillGuidanceMessage(*sys, ModelLabel(estimate.model, estimate.effects), a, o, estimate.utime, &m);
   publish_(estimate.utime, m);
   std::lock_guard lock(mu_);
   ++advised_;

@@ -17,10 +17,6 @@
 
 namespace kincal::daemon {
 
-// The message for `advice` on the estimate's system (`names` its parameters).
-void FillGuidanceMessage(const System& sys, const Advice& advice, const PlanOptions& o,
-                         int64_t utime, kincal::guidance_t* m);
-
 class Guidance {
  public:
   using Publish = std::function<void(int64_t utime, const kincal::guidance_t&)>;

@@ -11,6 +11,8 @@ namespace {
 // JPEG quality of recorded grey frames (frame_encoding: jpeg): high enough that marker
 // centres move by less than their noise (a webcam's own MJPG is typically 75-90).
 constexpr int kJpegQuality = 95;
+// guidance_t.time_to_target_s beyond what the advice predicts (10 minutes).
+constexpr double kBeyondS = 1e9;
 
 }  // namespace
 
@@ -120,6 +122,42 @@ void FillHealthCounters(const DaemonCounters& c, kincal::health_t* m) {
 #define KINCAL_HEALTH_FIELD(name, meaning) m->name = c.name;
   KINCAL_DAEMON_COUNTERS(KINCAL_HEALTH_FIELD)
 #undef KINCAL_HEALTH_FIELD
+}
+
+std::string ModelLabel(std::string_view model, const std::vector<std::string>& effects) {
+  std::string label(model);
+  for (const auto& e : effects) label += "+" + e;
+  return label;
+}
+
+void FillGuidanceMessage(const System& sys, const std::string& model, const Advice& a,
+                         const PlanOptions& o, int64_t utime, kincal::guidance_t* m) {
+  m->schema_version = 1;
+  m->utime = utime;
+  m->model = model;
+  const int n = sys.num_params();
+  m->parameter = a.worst >= 0 ? sys.params()[static_cast<size_t>(a.worst)].name : "";
+  m->sigma = a.worst >= 0 ? a.sigma_now[a.worst] : 0.0;
+  m->target = a.worst >= 0 && a.worst_ratio > 0.0 ? m->sigma / a.worst_ratio : 0.0;
+  m->sigma_after = a.worst >= 0 ? a.sigma_after[a.worst] : 0.0;
+  m->motion = a.motion;
+  m->duration_s = a.duration_s;
+  m->num_controls = sys.num_controls();
+  m->control_names.clear();
+  for (const auto& c : sys.model().controls()) m->control_names.push_back(c.name);
+  m->controls.assign(a.controls.begin(), a.controls.begin() + sys.num_controls());
+  m->time_to_target_s = std::isnan(a.time_to_target_s)   ? -1.0
+                        : std::isinf(a.time_to_target_s) ? kBeyondS
+                                                         : a.time_to_target_s;
+  m->num_params = n;
+  m->names.clear();
+  m->sigmas.assign(static_cast<size_t>(n), 0.0);
+  m->targets.assign(static_cast<size_t>(n), 0.0);
+  for (int i = 0; i < n; ++i) {
+    m->names.push_back(sys.params()[static_cast<size_t>(i)].name);
+    m->sigmas[static_cast<size_t>(i)] = a.sigma_now[i];
+    if (o.targets.size() == n) m->targets[static_cast<size_t>(i)] = o.targets[i];
+  }
 }
 
 }  // namespace kincal::daemon

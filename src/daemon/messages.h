@@ -3,6 +3,7 @@
 #pragma once
 
 #include <kincal/frame_t.hpp>
+#include <kincal/guidance_t.hpp>
 #include <kincal/health_t.hpp>
 #include <kincal/markers_t.hpp>
 #include <kincal/model_check_t.hpp>
@@ -18,6 +19,7 @@
 #include "kincal/daemon/frame.h"
 #include "kincal/daemon/samples.h"
 #include "kincal/estimation/filter.h"
+#include "kincal/plan/advice.h"
 #include "kincal/system.h"
 
 namespace kincal::daemon {
@@ -35,6 +37,11 @@ void FillParamsMessage(const System& sys, const StateVec& state, const StateMat&
                        kincal::params_t* m);
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
                                         int64_t utime);
+// "model+effect+effect", as model_check_t and guidance_t name the system in use.
+std::string ModelLabel(std::string_view model, const std::vector<std::string>& effects);
+// What to drive next (kincal/plan/advice.h) on the estimate's system.
+void FillGuidanceMessage(const System& sys, const std::string& model, const Advice& advice,
+                         const PlanOptions& o, int64_t utime, kincal::guidance_t* m);
 // The counters, whole, into a health message (the status fields are the caller's).
 void FillHealthCounters(const DaemonCounters& c, kincal::health_t* m);
 
