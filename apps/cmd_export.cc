@@ -52,25 +52,6 @@ daemon::Checkpoint FromLog(const std::string& path, const std::string& channel) 
   return c;
 }
 
-// The report's final estimate; its covariance is diagonal (the report keeps only sigma).
-daemon::Checkpoint FromReport(const std::string& path) {
-  ReportEstimate r;
-  if (Status s = ReadReportEstimate(path, &r); !s.ok()) throw std::runtime_error(s.message());
-  daemon::Checkpoint c;
-  c.model = r.model;
-  c.effects = r.effects;
-  c.filter = "batch (kincal analyze)";
-  c.names = r.names;
-  c.units = r.units;
-  c.values = r.values;
-  c.covariance =
-      Eigen::MatrixXd::Zero(static_cast<int>(r.names.size()), static_cast<int>(r.names.size()));
-  for (size_t i = 0; i < r.sigmas.size(); ++i) {
-    c.covariance(static_cast<int>(i), static_cast<int>(i)) = r.sigmas[i] * r.sigmas[i];
-  }
-  return c;
-}
-
 // "k=v,k=v" into numbers; an error names the item.
 std::map<std::string, double> ParseNominal(const std::string& text) {
   std::map<std::string, double> out;
@@ -89,6 +70,24 @@ std::map<std::string, double> ParseNominal(const std::string& text) {
 }
 
 }  // namespace
+
+daemon::Checkpoint ReadReportAsCheckpoint(const std::string& path) {
+  ReportEstimate r;
+  if (Status s = ReadReportEstimate(path, &r); !s.ok()) throw std::runtime_error(s.message());
+  daemon::Checkpoint c;
+  c.model = r.model;
+  c.effects = r.effects;
+  c.filter = "batch (kincal analyze)";
+  c.names = r.names;
+  c.units = r.units;
+  c.values = r.values;
+  c.covariance =
+      Eigen::MatrixXd::Zero(static_cast<int>(r.names.size()), static_cast<int>(r.names.size()));
+  for (size_t i = 0; i < r.sigmas.size(); ++i) {
+    c.covariance(static_cast<int>(i), static_cast<int>(i)) = r.sigmas[i] * r.sigmas[i];
+  }
+  return c;
+}
 
 Command AddExport(CLI::App& app) {
   struct Args {
@@ -121,7 +120,7 @@ Command AddExport(CLI::App& app) {
       c = FromLog(a->log, a->channel);
       source = a->log + " (" + a->channel + ")";
     } else if (!a->report.empty()) {
-      c = FromReport(a->report);
+      c = ReadReportAsCheckpoint(a->report);
       source = a->report;
     } else {
       throw std::runtime_error("give --checkpoint FILE, --log FILE or --report FILE");

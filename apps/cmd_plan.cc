@@ -66,22 +66,11 @@ void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen
   *c = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < n; ++i)
     c->diagonal()[i] = std::pow(sys.params()[static_cast<size_t>(i)].default_sigma, 2);
-  std::vector<std::string> names;
-  std::vector<double> values;
-  Eigen::MatrixXd cov;
-  std::string source;
-  if (!a.checkpoint.empty()) {
-    const daemon::Checkpoint ck = daemon::ReadCheckpoint(a.checkpoint);
-    names = ck.names, values = ck.values, cov = ck.covariance, source = a.checkpoint;
-  } else if (!a.report.empty()) {
-    ReportEstimate r;
-    if (const Status s = ReadReportEstimate(a.report, &r); !s.ok())
-      throw std::runtime_error(s.message());
-    names = r.names, values = r.values, source = a.report;
-    cov = Eigen::MatrixXd::Zero(static_cast<int>(names.size()), static_cast<int>(names.size()));
-    for (size_t i = 0; i < r.sigmas.size(); ++i)
-      cov(static_cast<int>(i), static_cast<int>(i)) = r.sigmas[i] * r.sigmas[i];
-  }
+  if (a.checkpoint.empty() && a.report.empty()) return;
+  const std::string& source = a.checkpoint.empty() ? a.report : a.checkpoint;
+  const daemon::Checkpoint ck = a.checkpoint.empty() ? ReadReportAsCheckpoint(a.report)
+                                                     : daemon::ReadCheckpoint(a.checkpoint);
+  const std::vector<std::string>& names = ck.names;
   std::vector<int> at(names.size(), -1);
   for (size_t k = 0; k < names.size(); ++k) {
     at[k] = sys.ParamIndex(names[k]);
@@ -89,11 +78,11 @@ void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen
       throw std::runtime_error(source + ": parameter '" + names[k] + "' is not one of the " +
                                std::string(sys.model().name()) + " system's");
     }
-    (*p)[at[k]] = values[k];
+    (*p)[at[k]] = ck.values[k];
   }
   for (size_t k = 0; k < names.size(); ++k) {
     for (size_t l = 0; l < names.size(); ++l)
-      (*c)(at[k], at[l]) = cov(static_cast<int>(k), static_cast<int>(l));
+      (*c)(at[k], at[l]) = ck.covariance(static_cast<int>(k), static_cast<int>(l));
   }
 }
 

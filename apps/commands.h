@@ -6,6 +6,8 @@
 #include <functional>
 #include <string>
 
+#include "kincal/daemon/checkpoint.h"
+
 namespace kincal::app {
 
 using Command = std::function<int()>;
@@ -17,6 +19,10 @@ inline constexpr long kMaxImagePixels = 64L << 20;
 // Writes a tool's output whole or not at all (kincal/io/output_file.h); throws
 // std::runtime_error with the status's message, which main() prints before exiting 1.
 void WriteOutput(const std::string& path, const std::string& text, const char* what);
+
+// An analyze report.json's final estimate as a checkpoint; its covariance is diagonal (the
+// report keeps only sigma). Throws std::runtime_error naming the file and field.
+daemon::Checkpoint ReadReportAsCheckpoint(const std::string& path);
 
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);
