@@ -21,6 +21,9 @@ constexpr double kFocalPx = 500.0;  // chosen: see the header
 constexpr double kMaxFitChi2 = 13.8;
 // Grey-level noise of the first calibration pass.
 constexpr double kTrialNoiseGrey = 3.0;
+// The centres must scatter as asked to this fraction after the image noise is scaled
+// (sampling error of the scatter: about 4 % with 64 frames of 4 markers).
+constexpr double kCalibrationTolerance = 0.15;
 
 vision::FloorExtrinsics Table63Floor() {
   // Rows of R_cf are the camera axes in floor coordinates. Looking straight down with image
@@ -114,6 +117,15 @@ PixelPoseMeter::PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& opti
     noise_grey_ *= options_.centroid_sigma_px / s;
   }
   measured_sigma_ = CentreScatter(noise_grey_, rng);
+  // Noise that breaks the detection (misplaced centres) makes the scatter jump instead:
+  // then the scaling does not converge, and the scatter asked for cannot be had.
+  if (!(std::abs(measured_sigma_ / options_.centroid_sigma_px - 1.0) <= kCalibrationTolerance)) {
+    throw std::invalid_argument(
+        "pixel: detected centres cannot be made to scatter by " +
+        std::to_string(options_.centroid_sigma_px) + " px with this camera and target (" +
+        std::to_string(measured_sigma_) + " px at " + std::to_string(noise_grey_) +
+        " grey levels of image noise; more breaks the detection): ask for less");
+  }
 }
 
 // Scatter (px per axis) of each marker's detected centre about its own mean over frames
