@@ -165,7 +165,17 @@ bool PlanOptions::IsValid(const System& sys, std::string* error) const {
     *error = "targets: one sigma per parameter (0: none) expected";
     return false;
   }
+  if (start && !start->allFinite()) {
+    *error = "start: a finite pose expected";
+    return false;
+  }
   return info.IsValid(error);
+}
+
+Eigen::Vector3d StartPose(const Workspace& ws, const PlanOptions& o) {
+  if (o.start) return *o.start;
+  const Eigen::Vector2d c = ws.Centre();
+  return {c.x(), c.y(), 0.0};
 }
 
 std::vector<Values> CandidateControls(const System& sys, const Eigen::VectorXd& params,
@@ -269,8 +279,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   Motion* plan) {
   std::string error;
   if (!o.IsValid(sys, &error)) return Status::Error("plan: " + error);
-  const Eigen::Vector2d c = ws.Centre();
-  const Eigen::Vector3d start(c.x(), c.y(), 0.0);
+  const Eigen::Vector3d start = StartPose(ws, o);
   plan->name = "plan";
   plan->controls = ControlSignal(sys.num_controls(), 0);
   plan->segment_starts_s = {0.0};
@@ -309,7 +318,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
                false, &fleet);
   }
-  plan_internal::AppendRest(&plan->controls, segments * o.segment_s);
+  plan_internal::AppendStop(&plan->controls, segments * o.segment_s, o, &now);
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
   return Status{};
 }

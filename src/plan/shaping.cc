@@ -39,6 +39,20 @@ void AppendRest(ControlSignal* signal, double t_s) {
                  std::span<const double>(zero.data(), static_cast<size_t>(signal->num_channels())));
 }
 
+double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u) {
+  double ramp_s = 0.0;
+  for (size_t i = 0; i < static_cast<size_t>(signal->num_channels()); ++i) {
+    const double a = i < o.max_accel.size() ? o.max_accel[i] : 0.0;
+    if (a > 0.0) ramp_s = std::max(ramp_s, std::abs((*u)[i]) / a);
+  }
+  const double dt = 1.0 / o.control_rate_hz;
+  const double rest_s = t0_s + dt * std::ceil(ramp_s / dt - 1e-9);
+  AppendSlewed(signal, t0_s, rest_s, Values{}, o, u);
+  *u = Values{};
+  AppendRest(signal, rest_s);
+  return rest_s;
+}
+
 Eigen::Vector2d TwistOf(const System& sys, const Eigen::VectorXd& params, const Values& u) {
   const Twist<double> tw = sys.model().BodyTwist(params.data(), u.data());
   return {tw.vx, tw.omega};

@@ -22,6 +22,10 @@ void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values&
 // A sample of zeros at t_s: the robot stopped.
 void AppendRest(ControlSignal* signal, double t_s);
 
+// From t0_s, every channel from *u to zero at its acceleration limit (AppendSlewed), then a
+// sample at rest; *u ends at zero. Returns the time of the rest sample.
+double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u);
+
 // Controls within the limits whose body twist at `params` is (v, omega) as nearly as the
 // limits allow (least squares, Levenberg-Marquardt from a forward guess). Returns whether
 // the twist is reached to 1e-6 of its size.

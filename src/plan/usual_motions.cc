@@ -221,8 +221,7 @@ std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& param
 void EvaluateMotion(const System& sys, const Eigen::VectorXd& params,
                     const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                     double step_s, Motion* m) {
-  const Eigen::Vector2d c = ws.Centre();
-  const Eigen::Vector3d start(c.x(), c.y(), 0.0);
+  const Eigen::Vector3d start = StartPose(ws, o);
   DesignInformation info(sys, params, prior_cov, o.info);
   m->curve = SigmaCurve{};
   m->path.clear();

@@ -63,5 +63,30 @@ TEST(Shaping, ChannelsSlewTogetherAtTheirLimits) {
   }
 }
 
+// A plan ends with a stop every channel can follow, not a step to zero: from (10, -5) at
+// 20 and 40 per second, 0.5 s of ramp, then a sample at rest.
+TEST(Shaping, AStopRampsEveryChannelToRestAtItsLimit) {
+  PlanOptions o;
+  o.control_rate_hz = 100.0;
+  o.max_abs = {10.0, 10.0};
+  o.max_accel = {20.0, 40.0};
+  ControlSignal s(2, 0);
+  Values u = {10.0, -5.0};
+  s.Append(0, std::span<const double>(u.data(), 2));
+  const double rest = AppendStop(&s, 1.0, o, &u);
+  EXPECT_NEAR(rest, 1.5, 1e-9);
+  EXPECT_EQ(u[0], 0.0);
+  EXPECT_EQ(u[1], 0.0);
+  EXPECT_NEAR(s.At(1.25)[0], 5.0, 0.25);
+  EXPECT_EQ(s.At(rest)[0], 0.0);
+  EXPECT_EQ(s.At(rest)[1], 0.0);
+  for (size_t i = 1; i < s.size(); ++i) {
+    const auto& a = s.ValuesAt(static_cast<int>(i - 1));
+    const auto& b = s.ValuesAt(static_cast<int>(i));
+    EXPECT_LE(std::abs(b[0] - a[0]), 20.0 / 100.0 + 1e-9) << "at " << s.TimeAt(static_cast<int>(i));
+    EXPECT_LE(std::abs(b[1] - a[1]), 40.0 / 100.0 + 1e-9);
+  }
+}
+
 }  // namespace
 }  // namespace kincal::plan_internal

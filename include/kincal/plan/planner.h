@@ -20,6 +20,7 @@
 
 #include <Eigen/Core>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -46,8 +47,14 @@ struct PlanOptions {
   std::vector<int> care;    // parameter indices scored; empty: all
   Eigen::VectorXd targets;  // target sigma per parameter; 0 or empty: none
   DesignInformationOptions info;
+  // Robot pose (x, y, theta) where the motion starts, at rest; unset: the workspace's
+  // centre, heading along +x.
+  std::optional<Eigen::Vector3d> start;
   bool IsValid(const System& sys, std::string* error) const;
 };
+
+// Where a motion planned or evaluated with `o` in `ws` starts.
+Eigen::Vector3d StartPose(const Workspace& ws, const PlanOptions& o);
 
 // Fills o's limits and targets from name=value maps, as `kincal plan --limits/--targets`
 // and kincald's guidance section give them: <control>=max |u|, accel=.. (every channel,
@@ -77,7 +84,8 @@ struct Motion {
 };
 
 // The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
-// `prior_cov` are the design point and its uncertainty.
+// `prior_cov` are the design point and its uncertainty. The controls end with a stop at
+// the acceleration limits (after duration_s), then a sample at rest.
 Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                   Motion* plan);
