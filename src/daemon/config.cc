@@ -308,6 +308,8 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("targets", &c.guidance.targets);
     s.Get("pose_sigma", &c.guidance.pose_sigma);
     s.Get("pose_rate_hz", &c.guidance.pose_rate_hz);
+    s.Get("drive", &c.guidance.drive);
+    s.Get("drive_pause_s", &c.guidance.drive_pause_s);
     s.CheckUnknown();
   }
   top.CheckUnknown();

@@ -21,7 +21,22 @@ bool Expect(bool ok, const std::string& what, std::string* error) {
 
 // guidance.limits and guidance.targets name the robot's controls and parameters.
 bool GuidanceFitsTheRobot(const DaemonConfig& c, std::string* error) {
-  if (!c.guidance.enabled) return true;
+  if (!c.guidance.enabled) {
+    return Expect(!c.guidance.drive, "guidance.drive needs guidance.enabled: true", error);
+  }
+  if (c.guidance.drive && c.source != SourceKind::kSim) {
+    *error =
+        "guidance.drive needs source: sim (only the simulated robot can follow the plan; a "
+        "replayed drive run is replayed with drive: false and gives the same estimates)";
+    return false;
+  }
+  // An estimate must come while the robot rests: two params_t periods at least.
+  if (c.guidance.drive && c.filter.params_rate_hz > 0 &&
+      c.guidance.drive_pause_s < 2.0 / c.filter.params_rate_hz) {
+    *error = "guidance.drive_pause_s must be at least two filter.params_rate_hz periods (" +
+             std::to_string(2.0 / c.filter.params_rate_hz) + " s)";
+    return false;
+  }
   std::unique_ptr<System> sys;
   if (!MakeSystem(c.robot.model, c.robot.effects, {}, &sys).ok()) return true;  // robot's error
   PlanOptions o;
@@ -170,7 +185,9 @@ bool GuidanceOptions::IsValid(std::string* error) const {
       !Expect(pose_sigma.size() == 3 && pose_sigma[0] > 0 && pose_sigma[1] > 0 && pose_sigma[2] > 0,
               "guidance.pose_sigma needs 3 positive values (m, m, rad)", error) ||
       !Expect(pose_rate_hz > 0 && pose_rate_hz <= 1000,
-              "guidance.pose_rate_hz must be in (0, 1000]", error)) {
+              "guidance.pose_rate_hz must be in (0, 1000]", error) ||
+      !Expect(drive_pause_s >= 0.1 && drive_pause_s <= 60,
+              "guidance.drive_pause_s must be in [0.1, 60] s", error)) {
     return false;
   }
   return true;

@@ -18,6 +18,7 @@
 #include "daemon/control_input.h"
 #include "daemon/counters.h"
 #include "daemon/detection_stage.h"
+#include "daemon/drive_link.h"
 #include "daemon/filter_stage.h"
 #include "daemon/guidance.h"
 #include "daemon/health.h"
@@ -47,6 +48,7 @@ struct Daemon::Impl {
   DaemonConfig cfg;
   System sys;
   VisionSetup vis;
+  std::unique_ptr<DriveLink> drive;  // guidance.drive: before the source that drives by it
   std::unique_ptr<FrameSource> source;
   SourceCapabilities caps;
 
@@ -87,12 +89,14 @@ struct Daemon::Impl {
       : cfg(std::move(c)),
         sys(MakeSystem(cfg.robot.model, cfg.robot.effects)),
         vis(LoadVisionSetup(cfg)),
+        drive(MakeDrive(cfg, vis)),
         source(MakeSource(
             cfg, vis,
             [this](const void* data, size_t n, int64_t utime) { intake.OnMessage(data, n, utime); },
             [this](const std::string& ch, const void* data, size_t n) {
               out.PublishRaw(ch, data, n);
-            })),
+            },
+            drive.get())),
         caps(source->capabilities()),
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
@@ -115,6 +119,13 @@ struct Daemon::Impl {
                                               out.Publish(cfg.lcm.guidance_channel, utime, m);
                                             });
     }
+  }
+
+  static std::unique_ptr<DriveLink> MakeDrive(const DaemonConfig& c, const VisionSetup& v) {
+    if (!c.guidance.drive) return nullptr;
+    return std::make_unique<DriveLink>(
+        c.guidance,
+        MakeCameraView(v.camera, v.floor, v.layout, v.target_height_m, c.sim.margin_px));
   }
 
   // Live: fresh data matters more than old (drop the oldest); lossless: block.
@@ -162,6 +173,7 @@ struct Daemon::Impl {
         estimate = ck;
       }
       if (guidance) guidance->Offer(ck);
+      if (drive) drive->Offer(ck);
     };
     o.checkpoint_due = [this] { WriteCheckpointLogged(); };
     return o;
@@ -270,6 +282,9 @@ struct Daemon::Impl {
     const ControlTiming timing = intake.timing();
     c.control_jitter_p95_ms = timing.jitter_p95_ms;
     c.control_jitter_max_ms = timing.jitter_max_ms;
+    c.guidance_skipped_busy = guidance ? guidance->skipped_busy() : 0;
+    c.drive_legs = drive ? drive->legs() : 0;
+    c.drive_legs_failed = drive ? drive->legs_failed() : 0;
     return c;
   }
 };

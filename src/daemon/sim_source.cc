@@ -1,4 +1,6 @@
 // The simulated camera: a scenario's robot rendered through the synthetic camera.
+#include <spdlog/spdlog.h>
+
 #include <algorithm>
 #include <chrono>
 #include <kincal/controls_t.hpp>
@@ -7,6 +9,7 @@
 #include <random>
 #include <thread>
 
+#include "daemon/drive_link.h"
 #include "daemon/sources.h"
 #include "kincal/angles.h"
 #include "kincal/scenario.h"
@@ -19,13 +22,14 @@ namespace {
 class SimSource final : public FrameSource {
  public:
   SimSource(const SimSourceOptions& c, const VisionSetup& v, ControlIntake controls,
-            NetworkPublish publish)
+            NetworkPublish publish, DriveLink* drive)
       : cfg_(c),
         vis_(v),
         sc_(LoadScenario(c.sim.scenario)),
         truth_(MakeSystem(sc_.model, sc_.hidden_effects)),
         intake_(std::move(controls)),
         publish_(std::move(publish)),
+        drive_(drive),
         rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
         fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
     if (sc_.model != c.robot_model) {
@@ -60,9 +64,13 @@ class SimSource final : public FrameSource {
   Status Start() override {
     start_utime_ = PipelineUtime(MonotonicNs());
     start_mono_ = MonotonicNs();
+    if (drive_ && first_rest_ >= 0) drive_->Expect(start_utime_ + first_rest_ / 1000);
     return {};
   }
-  void Stop() override { stopped_ = true; }
+  void Stop() override {
+    stopped_ = true;
+    if (drive_) drive_->Cancel();
+  }
   SourceCapabilities capabilities() const override {
     return {.lossless = cfg_.sim.speed <= 0,
             .carries_controls = !cfg_.sim.controls_via_lcm,
@@ -136,12 +144,16 @@ class SimSource final : public FrameSource {
   // and the scenario's rates, not by the run's duration. A run no longer than one chunk
   // draws exactly what a whole-run simulation would.
   void NextChunk() {
-    const TimeNs chunk = SecondsToNs(cfg_.sim.chunk_s);
-    const TimeNs c0 = chunk_end_;
-    const TimeNs c1 = end_ - c0 > chunk ? c0 + chunk : end_;
     const size_t before = cmd_.size();
     cmd_.DiscardBefore(t_prev_);  // keeps the sample in force now
     ci_ -= std::min(ci_, before - cmd_.size());
+    if (drive_) {
+      NextLeg();
+      return;
+    }
+    const TimeNs chunk = SecondsToNs(cfg_.sim.chunk_s);
+    const TimeNs c0 = chunk_end_;
+    const TimeNs c1 = end_ - c0 > chunk ? c0 + chunk : end_;
     if (sc_.profile == "smooth") {
       AppendSmoothRandom(&cmd_, c0, c1, sc_.control_low, sc_.control_high, sc_.min_period_s,
                          sc_.control_rate_hz, rng_);
@@ -153,6 +165,56 @@ class SimSource final : public FrameSource {
     k_ = 0;
     chunk_end_ = c1;
   }
+
+  // guidance.drive: the next leg planned from the running estimate, where the robot stands,
+  // then drive_pause_s at rest (the first chunk is that rest only: there is no estimate
+  // yet). A leg that cannot be planned is a carry back to the centre.
+  void NextLeg() {
+    const TimeNs t0 = chunk_end_;
+    TimeNs rest = t0;
+    if (t0 > 0) {
+      ControlSignal leg;
+      const Status s = drive_->NextLeg(Eigen::Vector3d(x_[0], x_[1], x_[2]), sc_.control_rate_hz,
+                                       kDriveWait, &leg);
+      if (s.ok()) {
+        for (int i = 0; i < static_cast<int>(leg.size()); ++i) {
+          cmd_.Append(t0 + SecondsToNs(leg.TimeAt(i)),
+                      std::span<const double>(leg.ValuesAt(i).data(), NumControls()));
+        }
+        rest = t0 + SecondsToNs(leg.TimeAt(static_cast<int>(leg.size()) - 1)) + ControlPeriod();
+      } else {
+        if (!stopped_ && drive_->legs_failed() == 1) {
+          spdlog::warn("{}; the robot is carried back (further failures are counted)", s.message());
+        }
+        carrying_ = true;
+        carry_until_ = t0 + SecondsToNs(cfg_.sim.carry_s);
+        rest = carry_until_;
+      }
+    }
+    const TimeNs c1 = std::min(end_, rest + SecondsToNs(cfg_.drive_pause_s));
+    const ControlSignal::Values zero{};
+    for (TimeNs t = rest; t < c1; t += ControlPeriod()) {
+      cmd_.Append(t, std::span<const double>(zero.data(), NumControls()));
+    }
+    if (c1 < end_) ExpectRestAt(rest);
+    times_ = FrameTimes(next_frame_, c1, sc_.camera, rng_, &next_frame_);
+    k_ = 0;
+    chunk_end_ = c1;
+  }
+
+  // The leg after this rest is planned from the first estimate at or after it (pipeline
+  // time: the first rest is named once Start() has fixed the run's start).
+  void ExpectRestAt(TimeNs rest) {
+    if (start_utime_ != 0) {
+      drive_->Expect(start_utime_ + rest / 1000);
+    } else {
+      first_rest_ = rest;
+    }
+  }
+
+  size_t NumControls() const { return static_cast<size_t>(truth_.num_controls()); }
+
+  TimeNs ControlPeriod() const { return SecondsToNs(1.0 / sc_.control_rate_hz); }
 
   double Heading() {
     return std::uniform_real_distribution<double>(-std::numbers::pi, std::numbers::pi)(rng_);
@@ -215,6 +277,7 @@ class SimSource final : public FrameSource {
   System truth_;
   ControlIntake intake_;
   NetworkPublish publish_;
+  DriveLink* const drive_;  // guidance.drive, else null
   std::mt19937_64 rng_;
   std::mt19937_64 fault_rng_;  // its own stream: faults do not change the rest of the simulation
   VecN<kMaxState> p_true_;
@@ -234,14 +297,16 @@ class SimSource final : public FrameSource {
   TimeNs carry_until_ = 0;
   int64_t start_utime_ = 0;
   TimeNs start_mono_ = 0;
+  TimeNs first_rest_ = -1;  // guidance.drive: the first rest, until Start()
   std::atomic<bool> stopped_{false};
 };
 
 }  // namespace
 
 std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& c, const VisionSetup& v,
-                                           ControlIntake controls, NetworkPublish publish) {
-  return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish));
+                                           ControlIntake controls, NetworkPublish publish,
+                                           DriveLink* drive) {
+  return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish), drive);
 }
 
 }  // namespace kincal::daemon

@@ -44,14 +44,15 @@ int64_t PipelineUtime(TimeNs mono_ns) {
 }
 
 std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
-                                        ControlIntake controls, NetworkPublish publish) {
+                                        ControlIntake controls, NetworkPublish publish,
+                                        DriveLink* drive) {
   switch (c.source) {
     case SourceKind::kSim:
       return MakeSimSource(
           {c.sim, c.robot.model,
-           c.sim.controls_channel.empty() ? c.lcm.controls_channel : c.sim.controls_channel,
-           c.file},
-          v, std::move(controls), std::move(publish));
+           c.sim.controls_channel.empty() ? c.lcm.controls_channel : c.sim.controls_channel, c.file,
+           c.guidance.drive_pause_s},
+          v, std::move(controls), std::move(publish), drive);
     case SourceKind::kReplay:
       return MakeReplaySource(c.replay, c.lcm, std::move(controls));
     case SourceKind::kV4l2:

@@ -31,15 +31,20 @@ using NetworkPublish = std::function<void(const std::string& channel, const void
 // The simulated camera: renders the scenario's robot (true parameters, hidden effects)
 // carrying the target, and publishes the robot's commands like a robot would. A run
 // ends when the target nears the image edge; the robot is then carried back to the
-// centre (no target in view for sim.carry_s) and starts a new run.
+// centre (no target in view for sim.carry_s) and starts a new run. The robot drives the
+// scenario's random controls, or with `drive` (guidance.drive) legs planned from the
+// running estimate (daemon/drive_link.h), each followed by drive_pause_s at rest.
 struct SimSourceOptions {
   SimOptions sim;
   std::string robot_model;       // the config's robot.model: must be the scenario's
   std::string controls_channel;  // where the simulated robot publishes its commands
   std::string config_file;       // named in errors
+  double drive_pause_s = 0.5;    // guidance.drive_pause_s
 };
+class DriveLink;
 std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& o, const VisionSetup& v,
-                                           ControlIntake controls, NetworkPublish publish);
+                                           ControlIntake controls, NetworkPublish publish,
+                                           DriveLink* drive = nullptr);
 // An LCM log written by `kincald --record`: frames on lcm.frame_channel, controls on
 // lcm.controls_channel (other channels are skipped and counted).
 std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
@@ -50,9 +55,11 @@ std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o);
 std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
 
 // The source the config names (source: sim | v4l2 | libcamera | replay). `controls` and
-// `publish` are used by the sources that carry the robot's controls (sim, replay).
+// `publish` are used by the sources that carry the robot's controls (sim, replay), `drive`
+// by the simulated camera (guidance.drive; null: the scenario's controls).
 std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
-                                        ControlIntake controls, NetworkPublish publish);
+                                        ControlIntake controls, NetworkPublish publish,
+                                        DriveLink* drive = nullptr);
 
 // The clocks (kincal/time.h):
 //   host realtime   CLOCK_REALTIME now, in us; it steps with NTP (health messages only);

@@ -190,6 +190,11 @@ struct GuidanceOptions {
   std::map<std::string, double> targets;
   std::vector<double> pose_sigma = {0.002, 0.002, 0.005};  // m, m, rad
   double pose_rate_hz = 15.0;
+  // With source: sim, the simulated robot drives legs planned from the running estimate
+  // (horizon_s each, kept in the camera's view with sim.margin_px), resting
+  // drive_pause_s after each; the next leg is planned from an estimate made at rest.
+  bool drive = false;
+  double drive_pause_s = 0.5;
   bool IsValid(std::string* error) const;
 };
 

@@ -48,7 +48,10 @@ namespace kincal::daemon {
   X(controls_dropped_queue, "controls dropped by the full control queue (live)")             \
   X(control_clock_steps, "the robot's clock stepped (control_stamp: mapped): new envelope")  \
   X(log_events_written, "events written to the --record log")                                \
-  X(log_events_lost, "events the recorder dropped (live, its queue full)")
+  X(log_events_lost, "events the recorder dropped (live, its queue full)")                   \
+  X(guidance_skipped_busy, "estimates offered while the guidance worker was busy: skipped")  \
+  X(drive_legs, "guidance.drive: legs the simulated robot drove by the plan")                \
+  X(drive_legs_failed, "guidance.drive: legs not planned (no estimate, no leg in view)")
 
 struct DaemonCounters {
 #define KINCAL_COUNTER_FIELD(name, meaning) int64_t name = 0;

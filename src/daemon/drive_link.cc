@@ -1,0 +1,89 @@
+#include "daemon/drive_link.h"
+
+#include "kincal/plan/planner.h"
+#include "kincal/system.h"
+
+namespace kincal::daemon {
+
+DriveLink::DriveLink(const GuidanceOptions& options, std::unique_ptr<Workspace> view)
+    : opt_(options), view_(std::move(view)) {}
+
+void DriveLink::Offer(const Checkpoint& estimate) {
+  {
+    std::lock_guard lock(mu_);
+    if (!rest_utime_ || kept_ || estimate.utime < *rest_utime_) return;
+    kept_ = estimate;
+  }
+  cv_.notify_all();
+}
+
+void DriveLink::Expect(int64_t rest_utime) {
+  std::lock_guard lock(mu_);
+  rest_utime_ = rest_utime;
+  kept_.reset();
+}
+
+void DriveLink::Cancel() {
+  {
+    std::lock_guard lock(mu_);
+    cancelled_ = true;
+  }
+  cv_.notify_all();
+}
+
+Status DriveLink::NextLeg(const Eigen::Vector3d& pose, double control_rate_hz,
+                          std::chrono::milliseconds wait, ControlSignal* leg) {
+  std::optional<Checkpoint> estimate;
+  {
+    std::unique_lock lock(mu_);
+    cv_.wait_for(lock, wait, [this] { return cancelled_ || kept_.has_value(); });
+    if (!kept_ || cancelled_) {
+      ++failed_;
+      return Status::Error(cancelled_ ? "guidance.drive: stopped"
+                                      : "guidance.drive: no estimate came while the robot rested "
+                                        "(is the target in view and the filter running?)");
+    }
+    estimate = std::move(kept_);
+    kept_.reset();
+    rest_utime_.reset();
+  }
+  const Status s = Plan(*estimate, pose, control_rate_hz, leg);
+  std::lock_guard lock(mu_);
+  ++(s.ok() ? legs_ : failed_);
+  return s;
+}
+
+// The estimate's own system (effects added online included), its values and covariance.
+Status DriveLink::Plan(const Checkpoint& estimate, const Eigen::Vector3d& pose,
+                       double control_rate_hz, ControlSignal* leg) const {
+  std::unique_ptr<System> sys;
+  PlanOptions o;
+  if (Status s = MakeSystem(estimate.model, estimate.effects, {}, &sys); !s.ok()) return s;
+  if (Status s = PlanLimitsFrom(*sys, opt_.limits, opt_.targets, &o); !s.ok()) return s;
+  if (static_cast<int>(estimate.values.size()) != sys->num_params()) {
+    return Status::Error("guidance.drive: the estimate does not match its system");
+  }
+  o.duration_s = opt_.horizon_s;
+  o.control_rate_hz = control_rate_hz;
+  o.info.pose_sigma = Eigen::Vector3d(opt_.pose_sigma[0], opt_.pose_sigma[1], opt_.pose_sigma[2]);
+  o.info.pose_rate_hz = opt_.pose_rate_hz;
+  o.start = pose;
+  const Eigen::VectorXd p =
+      Eigen::Map<const Eigen::VectorXd>(estimate.values.data(), sys->num_params());
+  Motion plan;
+  if (Status s = PlanMotion(*sys, p, estimate.covariance, *view_, o, &plan); !s.ok()) return s;
+  *leg = std::move(plan.controls);
+  return Status{};
+}
+
+int64_t DriveLink::legs() const {
+  std::lock_guard lock(mu_);
+  return legs_;
+}
+
+int64_t DriveLink::legs_failed() const {
+  std::lock_guard lock(mu_);
+  return failed_;
+}
+
+}  // namespace kincal::daemon
