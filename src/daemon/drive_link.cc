@@ -1,7 +1,6 @@
 #include "daemon/drive_link.h"
 
-#include "kincal/plan/planner.h"
-#include "kincal/system.h"
+#include "daemon/guidance.h"
 
 namespace kincal::daemon {
 
@@ -53,25 +52,19 @@ Status DriveLink::NextLeg(const Eigen::Vector3d& pose, double control_rate_hz,
   return s;
 }
 
-// The estimate's own system (effects added online included), its values and covariance.
+// A plan of horizon_s from `pose`, with the estimate's system, values and covariance.
 Status DriveLink::Plan(const Checkpoint& estimate, const Eigen::Vector3d& pose,
                        double control_rate_hz, ControlSignal* leg) const {
-  std::unique_ptr<System> sys;
-  PlanOptions o;
-  if (Status s = MakeSystem(estimate.model, estimate.effects, {}, &sys); !s.ok()) return s;
-  if (Status s = PlanLimitsFrom(*sys, opt_.limits, opt_.targets, &o); !s.ok()) return s;
-  if (static_cast<int>(estimate.values.size()) != sys->num_params()) {
-    return Status::Error("guidance.drive: the estimate does not match its system");
+  GuidancePlanning g;
+  if (Status s = GuidancePlanningFrom(opt_, estimate, &g); !s.ok()) {
+    return Status::Error("guidance.drive: " + s.message());
   }
-  o.duration_s = opt_.horizon_s;
-  o.control_rate_hz = control_rate_hz;
-  o.info.pose_sigma = Eigen::Vector3d(opt_.pose_sigma[0], opt_.pose_sigma[1], opt_.pose_sigma[2]);
-  o.info.pose_rate_hz = opt_.pose_rate_hz;
-  o.start = pose;
-  const Eigen::VectorXd p =
-      Eigen::Map<const Eigen::VectorXd>(estimate.values.data(), sys->num_params());
+  g.options.duration_s = opt_.horizon_s;
+  g.options.control_rate_hz = control_rate_hz;
+  g.options.start = pose;
   Motion plan;
-  if (Status s = PlanMotion(*sys, p, estimate.covariance, *view_, o, &plan); !s.ok()) return s;
+  const Status s = PlanMotion(*g.sys, g.params, estimate.covariance, *view_, g.options, &plan);
+  if (!s.ok()) return s;
   *leg = std::move(plan.controls);
   return Status{};
 }

@@ -3,6 +3,20 @@
 #include "daemon/messages.h"
 
 namespace kincal::daemon {
+
+Status GuidancePlanningFrom(const GuidanceOptions& g, const Checkpoint& estimate,
+                            GuidancePlanning* out) {
+  if (Status s = MakeSystem(estimate.model, estimate.effects, {}, &out->sys); !s.ok()) return s;
+  if (Status s = PlanLimitsFrom(*out->sys, g.limits, g.targets, &out->options); !s.ok()) return s;
+  if (static_cast<int>(estimate.values.size()) != out->sys->num_params()) {
+    return Status::Error("the estimate does not match its system");
+  }
+  out->params = Eigen::Map<const Eigen::VectorXd>(estimate.values.data(), out->sys->num_params());
+  out->options.info.pose_sigma = Eigen::Vector3d(g.pose_sigma[0], g.pose_sigma[1], g.pose_sigma[2]);
+  out->options.info.pose_rate_hz = g.pose_rate_hz;
+  return Status{};
+}
+
 Guidance::Guidance(const GuidanceOptions& options, Publish publish)
     : opt_(options), publish_(std::move(publish)), thread_([this] { Loop(); }) {}
 
@@ -67,31 +81,21 @@ void Guidance::Loop() {
   }
 }
 
-// On the worker thread: the estimate's own system (effects added online included).
+// On the worker thread.
 void Guidance::Advise(const Checkpoint& estimate) {
-  std::string error;
-  std::unique_ptr<System> sys;
-  PlanOptions o;
-  o.info.pose_sigma = Eigen::Vector3d(opt_.pose_sigma[0], opt_.pose_sigma[1], opt_.pose_sigma[2]);
-  o.info.pose_rate_hz = opt_.pose_rate_hz;
+  GuidancePlanning g;
   Advice a;
-  Status s = MakeSystem(estimate.model, estimate.effects, {}, &sys);
-  if (s.ok()) s = PlanLimitsFrom(*sys, opt_.limits, opt_.targets, &o);
-  if (s.ok() && static_cast<int>(estimate.values.size()) != sys->num_params()) {
-    s = Status::Error("the estimate does not match its system");
-  }
-  if (s.ok()) {
-    const Eigen::VectorXd p =
-        Eigen::Map<const Eigen::VectorXd>(estimate.values.data(), sys->num_params());
-    s = kincal::Advise(*sys, p, estimate.covariance, o, opt_.horizon_s, &a);
-  }
+  Status s = GuidancePlanningFrom(opt_, estimate, &g);
+  if (s.ok())
+    s = kincal::Advise(*g.sys, g.params, estimate.covariance, g.options, opt_.horizon_s, &a);
   if (!s.ok()) {
     std::lock_guard lock(mu_);
     last_error_ = s.message();
     return;
   }
   kincal::guidance_t m;
-  FillGuidanceMessage(*sys, ModelLabel(estimate.model, estimate.effects), a, o, estimate.utime, &m);
+  FillGuidanceMessage(*g.sys, ModelLabel(estimate.model, estimate.effects), a, g.options,
+                      estimate.utime, &m);
   publish_(estimate.utime, m);
   std::lock_guard lock(mu_);
   ++advised_;

@@ -7,6 +7,7 @@
 #include <condition_variable>
 #include <functional>
 #include <kincal/guidance_t.hpp>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -16,6 +17,17 @@
 #include "kincal/plan/advice.h"
 
 namespace kincal::daemon {
+
+// What the guidance plans with, from an estimate: its own system (effects added online
+// included), its values, and plan options with guidance.limits, targets, pose_sigma and
+// pose_rate_hz. An error when the estimate does not fit its system or the options.
+struct GuidancePlanning {
+  std::unique_ptr<System> sys;
+  Eigen::VectorXd params;
+  PlanOptions options;
+};
+Status GuidancePlanningFrom(const GuidanceOptions& g, const Checkpoint& estimate,
+                            GuidancePlanning* out);
 
 class Guidance {
  public:

@@ -166,7 +166,8 @@ class SimSource final : public FrameSource {
     chunk_end_ = c1;
   }
 
-  // guidance.drive: the next leg planned from the running estimate, where the robot stands,
+  // guidance.drive: the next leg planned from the running estimate, where the robot stands
+  // (its true pose: a real robot's driver would take the measured one from KINCAL_POSE),
   // then drive_pause_s at rest (the first chunk is that rest only: there is no estimate
   // yet). A leg that cannot be planned is a carry back to the centre.
   void NextLeg() {
