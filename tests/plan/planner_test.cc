@@ -14,7 +14,7 @@
 #include "kincal/estimation/batch.h"
 #include "kincal/simulator.h"
 #include "kincal/thesis_vision.h"
-#include "kincal/vision/setup_files.h"
+#include "sim/shipped_camera.h"
 
 namespace kincal {
 namespace {
@@ -218,22 +218,6 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaForAUnicycleAndATricycle) {
   ExpectPredictedSigmaGaussian(Tricycle(8.0), 40, 10, "tricycle");
 }
 
-// The shipped simulated camera kincald renders with: 640x480, f 500 px, 2 m up, the large
-// plate 0.1 m above the floor.
-ThesisVision ShippedCamera() {
-  ThesisVision v;
-  v.camera.width = 640;
-  v.camera.height = 480;
-  v.camera.fx = v.camera.fy = 500.0;
-  v.camera.cx = 319.5;
-  v.camera.cy = 239.5;
-  v.floor = vision::NadirFloor(2.0);
-  v.layout =
-      vision::ReadTargetLayoutYaml(std::string(KINCAL_SOURCE_DIR) + "/config/target_large.yaml");
-  v.target_height_m = 0.1;
-  return v;
-}
-
 // The pose noise of a camera's images, over poses across the view: the scatter of the
 // errors about their mean (the centres' small biases vary with where a marker falls on
 // the pixel grid, and over a path they are noise; their common part, an offset of every
@@ -267,7 +251,7 @@ Eigen::Vector3d MeasuredPoseSigma(PixelPoseMeter& meter, std::mt19937_64& rng) {
 // spread is the predicted sigma within `tolerance` (pooled) and they lie inside 3 sigma.
 void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const char* label,
                                        double tolerance = 0.2) {
-  const ThesisVision v = ShippedCamera();
+  const ThesisVision v = test_util::ShippedCamera();
   std::mt19937_64 rng(seed);
   PixelPoseOptions po;
   po.centroid_sigma_px = 0.05;  // about 12 grey levels of image noise; 0.1 px breaks detection

@@ -7,7 +7,7 @@
 #include <numbers>
 
 #include "kincal/angles.h"
-#include "kincal/vision/setup_files.h"
+#include "sim/shipped_camera.h"
 
 namespace kincal {
 namespace {
@@ -55,15 +55,7 @@ TEST(PixelPoseMeter, CentresScatterAtTheRequestedSigma) {
 // 0.1 px only at image noise that breaks their detection. The meter used to settle
 // silently at 0.002 px; now it says so (and 0.05 px is had).
 TEST(PixelPoseMeter, AScatterTheDetectionCannotGiveIsAnError) {
-  ThesisVision v;
-  v.camera.width = 640;
-  v.camera.height = 480;
-  v.camera.fx = v.camera.fy = 500.0;
-  v.camera.cx = 319.5;
-  v.camera.cy = 239.5;
-  v.floor = vision::NadirFloor(2.0);
-  v.layout =
-      vision::ReadTargetLayoutYaml(std::string(KINCAL_SOURCE_DIR) + "/config/target_large.yaml");
+  const ThesisVision v = test_util::ShippedCamera();
   std::mt19937_64 rng(12);
   PixelPoseOptions o;
   o.centroid_sigma_px = 0.1;

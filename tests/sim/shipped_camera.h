@@ -1,0 +1,27 @@
+// Shared by tests that render through the camera kincald's simulator uses by default:
+// 640x480, f 500 px, 2 m above the floor looking straight down, the large plate 0.1 m
+// above the floor (config/kincald_sim.yaml).
+#pragma once
+
+#include <string>
+
+#include "kincal/thesis_vision.h"
+#include "kincal/vision/setup_files.h"
+
+namespace kincal::test_util {
+
+inline ThesisVision ShippedCamera() {
+  ThesisVision v;
+  v.camera.width = 640;
+  v.camera.height = 480;
+  v.camera.fx = v.camera.fy = 500.0;
+  v.camera.cx = 319.5;
+  v.camera.cy = 239.5;
+  v.floor = vision::NadirFloor(2.0);
+  v.layout =
+      vision::ReadTargetLayoutYaml(std::string(KINCAL_SOURCE_DIR) + "/config/target_large.yaml");
+  v.target_height_m = 0.1;
+  return v;
+}
+
+}  // namespace kincal::test_util
