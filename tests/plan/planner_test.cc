@@ -336,8 +336,9 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForAUnicycleAndATricycle
   ExpectPredictedSigmaThroughPixels(UnicycleWithLag(8.0), 24, 13, "unicycle + lag");
   // The tricycle's steering scale is 1.3-1.5x its predicted sigma through pixels (1.1-1.2x
   // with Gaussian poses on the same path): its heading-rate information is long-term, and
-  // the poses' heading carries a fixed pattern (the centres' pixel-grid bias, about 0.16
-  // mrad) that more frames do not average down; pooled 1.26 here, 1.08 with seed 15.
+  // the poses' heading carries a fixed pattern (the centres' pixel-grid bias, about 0.2
+  // mrad on its path) that more frames do not average down; pooled 1.26 here, 1.08 with
+  // seed 15 (docs/plan.md).
   ExpectPredictedSigmaThroughPixels(Tricycle(8.0), 24, 14, "tricycle", 0.3);
 }
 
