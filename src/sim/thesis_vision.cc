@@ -48,7 +48,7 @@ vision::FloorExtrinsics Table63Floor() {
 // hundredths of a pixel, well inside the 0.14 px noise, at a quarter of the default's cost.
 vision::RenderOptions RenderOptionsFor(const PixelPoseOptions& o, double noise_grey) {
   vision::RenderOptions r;
-  r.supersample = 4;
+  r.supersample = o.supersample;
   r.blur_sigma_px = o.blur_sigma_px;
   r.noise_sigma = noise_grey;
   return r;
@@ -94,10 +94,11 @@ bool PlateInView(const ThesisVision& v, const Eigen::Vector3d& pose, double marg
 
 bool PixelPoseOptions::IsValid(std::string* error) const {
   if (!(centroid_sigma_px > 0.0 && centroid_sigma_px < 2.0) ||
-      !(blur_sigma_px >= 0.0 && blur_sigma_px < 5.0) || calibration_frames < 8) {
+      !(blur_sigma_px >= 0.0 && blur_sigma_px < 5.0) || calibration_frames < 8 || supersample < 1 ||
+      supersample > 16) {
     *error =
-        "pixel: centroid_sigma_px in (0, 2), blur_sigma_px in [0, 5) and calibration_frames "
-        ">= 8 expected";
+        "pixel: centroid_sigma_px in (0, 2), blur_sigma_px in [0, 5), calibration_frames "
+        ">= 8 and supersample in [1, 16] expected";
     return false;
   }
   return true;
