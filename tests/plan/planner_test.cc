@@ -248,13 +248,16 @@ Eigen::Vector3d MeasuredPoseSigma(PixelPoseMeter& meter, std::mt19937_64& rng) {
 // Lowe's pose on the floor at the plate's height, every frame; the plan made in that
 // camera's view for the pose noise across it, its sigma predicted with the noise along its
 // path. Over `trials` batch fits (each frame weighted by its pose covariance) the errors'
-// spread is the predicted sigma within `tolerance` (pooled) and they lie inside 3 sigma.
-void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const char* label,
-                                       double tolerance = 0.2) {
+// spread is the predicted sigma within 20 % (pooled) and they lie inside 3 sigma.
+void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const char* label) {
   const ThesisVision v = test_util::ShippedCamera();
   std::mt19937_64 rng(seed);
   PixelPoseOptions po;
   po.centroid_sigma_px = 0.05;  // about 12 grey levels of image noise; 0.1 px breaks detection
+  // Rendered finely enough that the poses carry no fixed pattern (4x leaves one of about
+  // 0.2 mrad of heading that white-noise information cannot know: the tricycle's steering
+  // scale was then 1.5x its predicted sigma; PixelPoseMeter.FinerSupersampling...).
+  po.supersample = 8;
   PixelPoseMeter meter(v, po, rng);
   c.o.info.pose_sigma = MeasuredPoseSigma(meter, rng);
   const auto ws = MakeCameraView(v.camera, v.floor, v.layout, v.target_height_m, 10.0);
@@ -321,7 +324,7 @@ void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const 
   std::cout << label << " through pixels (pose sigma along the path "
             << c.o.info.pose_sigma.transpose() << "): pooled realised/predicted " << pooled << ", "
             << inside << " of " << total << " errors inside 3 sigma, " << lost << " frames lost\n";
-  EXPECT_NEAR(pooled, 1.0, tolerance) << label;
+  EXPECT_NEAR(pooled, 1.0, 0.2) << label;
   EXPECT_GE(inside, total * 95 / 100) << label;
   EXPECT_LT(lost, trials * static_cast<int>(times.size()) / 100) << label;
 }
@@ -332,14 +335,12 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixels) {
   ExpectPredictedSigmaThroughPixels(c, 16, 12, "diffdrive + lag, delay, lever arm");
 }
 
-TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForAUnicycleAndATricycle) {
+TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForAUnicycle) {
   ExpectPredictedSigmaThroughPixels(UnicycleWithLag(8.0), 24, 13, "unicycle + lag");
-  // The tricycle's steering scale is 1.3-1.5x its predicted sigma through pixels (1.1-1.2x
-  // with Gaussian poses on the same path): its heading-rate information is long-term, and
-  // the poses' heading carries a fixed pattern (the centres' pixel-grid bias, about 0.2
-  // mrad on its path) that more frames do not average down; pooled 1.26 here, 1.08 with
-  // seed 15 (docs/plan.md).
-  ExpectPredictedSigmaThroughPixels(Tricycle(8.0), 24, 14, "tricycle", 0.3);
+}
+
+TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForATricycle) {
+  ExpectPredictedSigmaThroughPixels(Tricycle(8.0), 24, 14, "tricycle");
 }
 
 TEST(Plan, OptionsAreCheckedAndNamed) {
