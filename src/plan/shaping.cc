@@ -6,18 +6,28 @@
 
 namespace kincal::plan_internal {
 
+namespace {
+
+// How long the slowest of `num_channels` channels needs from `from` to `to` at its
+// acceleration limit (0 without limits).
+double RampSeconds(const Values& from, const Values& to, int num_channels, const PlanOptions& o) {
+  double ramp_s = 0.0;
+  for (size_t i = 0; i < static_cast<size_t>(num_channels); ++i) {
+    const double a = i < o.max_accel.size() ? o.max_accel[i] : 0.0;
+    if (a > 0.0) ramp_s = std::max(ramp_s, std::abs(to[i] - from[i]) / a);
+  }
+  return ramp_s;
+}
+
+}  // namespace
+
 void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values& to,
                   const PlanOptions& o, Values* u) {
   const double dt = 1.0 / o.control_rate_hz;
   const int nc = signal->num_channels();
   // All channels arrive together: a straight ramp in control space (for a model linear
   // in its controls, a straight ramp of the twist), as long as the slowest channel needs.
-  double ramp_s = 0.0;
-  for (int c = 0; c < nc; ++c) {
-    const size_t i = static_cast<size_t>(c);
-    const double a = i < o.max_accel.size() ? o.max_accel[i] : 0.0;
-    if (a > 0.0) ramp_s = std::max(ramp_s, std::abs(to[i] - (*u)[i]) / a);
-  }
+  const double ramp_s = RampSeconds(*u, to, nc, o);
   Values rate{};
   for (int c = 0; c < nc; ++c) {
     const size_t i = static_cast<size_t>(c);
@@ -40,11 +50,7 @@ void AppendRest(ControlSignal* signal, double t_s) {
 }
 
 double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u) {
-  double ramp_s = 0.0;
-  for (size_t i = 0; i < static_cast<size_t>(signal->num_channels()); ++i) {
-    const double a = i < o.max_accel.size() ? o.max_accel[i] : 0.0;
-    if (a > 0.0) ramp_s = std::max(ramp_s, std::abs((*u)[i]) / a);
-  }
+  const double ramp_s = RampSeconds(*u, Values{}, signal->num_channels(), o);
   const double dt = 1.0 / o.control_rate_hz;
   const double rest_s = t0_s + dt * std::ceil(ramp_s / dt - 1e-9);
   AppendSlewed(signal, t0_s, rest_s, Values{}, o, u);
