@@ -150,10 +150,33 @@ TEST(Plan, EveryRobotWithinThePriorStaysInView) {
   EXPECT_GT(farthest, 0.25 * ws->Size());  // it does use the view
 }
 
-// The plan driven by the true robot, poses with Gaussian noise, fitted by the batch
-// (Ceres, from the design point): over 40 trials the errors' spread is the predicted sigma
-// within 20 % (pooled over the parameters scored; each within 35 %) and they lie inside
-// 3 sigma.
+// Errors of batch fits against the truth, per scored parameter, against the predicted
+// sigma: their spread (each and pooled) and how many lie inside 3 sigma.
+struct ErrorTally {
+  std::vector<int> scored;
+  Eigen::VectorXd predicted, sq;
+  int trials = 0, inside = 0, total = 0;
+  ErrorTally(std::vector<int> s, Eigen::VectorXd pred)
+      : scored(std::move(s)),
+        predicted(std::move(pred)),
+        sq(Eigen::VectorXd::Zero(predicted.size())) {}
+  void Add(const Eigen::VectorXd& estimate, const Eigen::VectorXd& truth) {
+    ++trials;
+    for (int i : scored) {
+      const double e = estimate[i] - truth[i];
+      sq[i] += e * e;
+      inside += std::abs(e) <= 3.0 * predicted[i] ? 1 : 0;
+      ++total;
+    }
+  }
+  double Ratio(int i) const { return std::sqrt(sq[i] / trials) / predicted[i]; }
+  double Pooled() const {
+    double p = 0.0;
+    for (int i : scored) p += Ratio(i) * Ratio(i);
+    return std::sqrt(p / static_cast<double>(scored.size()));
+  }
+};
+
 // Batch fits of simulated runs of the plan (truth drawn near the design point, Gaussian
 // poses): each parameter's error spread is its predicted sigma within 35 %, pooled within
 // 20 %, and the errors lie inside 3 sigma.
@@ -170,8 +193,7 @@ void ExpectPredictedSigmaGaussian(const Case& c, int trials, uint64_t seed, cons
   }
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, 1.0);
-  Eigen::VectorXd sq = Eigen::VectorXd::Zero(c.p.size());
-  int inside = 0, total = 0;
+  ErrorTally tally(ScoredParams(c.o, static_cast<int>(c.p.size())), predicted);
   for (int k = 0; k < trials; ++k) {
     // The truth drawn from the prior the plan was made for.
     Eigen::VectorXd truth = c.p;
@@ -185,28 +207,18 @@ void ExpectPredictedSigmaGaussian(const Case& c, int trials, uint64_t seed, cons
     bo.prior = ParamPrior{c.p, prior};
     const BatchResult b = FitBatch(c.sys, plan.controls, meas, c.p, bo);
     ASSERT_TRUE(b.status.ok()) << b.status.message();
-    for (int i : ScoredParams(c.o, static_cast<int>(c.p.size()))) {
-      const double e = b.params[i] - truth[i];
-      sq[i] += e * e;
-      inside += std::abs(e) <= 3.0 * predicted[i] ? 1 : 0;
-      ++total;
-    }
+    tally.Add(b.params, truth);
   }
-  double pooled = 0.0;
-  for (int i : ScoredParams(c.o, static_cast<int>(c.p.size()))) {
-    const double ratio = std::sqrt(sq[i] / trials) / predicted[i];
+  for (int i : tally.scored) {
     std::cout << label << ": " << c.sys.params()[static_cast<size_t>(i)].name
-              << ": realised/predicted sigma " << ratio << "\n";
-    EXPECT_GT(ratio, 0.65);
-    EXPECT_LT(ratio, 1.35);
-    pooled += sq[i] / (trials * predicted[i] * predicted[i]);
+              << ": realised/predicted sigma " << tally.Ratio(i) << "\n";
+    EXPECT_GT(tally.Ratio(i), 0.65);
+    EXPECT_LT(tally.Ratio(i), 1.35);
   }
-  pooled = std::sqrt(pooled /
-                     static_cast<double>(ScoredParams(c.o, static_cast<int>(c.p.size())).size()));
-  std::cout << label << ": pooled realised/predicted " << pooled << ", " << inside << " of "
-            << total << " errors inside 3 sigma\n";
-  EXPECT_NEAR(pooled, 1.0, 0.2);
-  EXPECT_GE(inside, total * 97 / 100);
+  std::cout << label << ": pooled realised/predicted " << tally.Pooled() << ", " << tally.inside
+            << " of " << tally.total << " errors inside 3 sigma\n";
+  EXPECT_NEAR(tally.Pooled(), 1.0, 0.2);
+  EXPECT_GE(tally.inside, tally.total * 97 / 100);
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigma) {
@@ -299,33 +311,24 @@ void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const 
   c.o.info.pose_sigma = (path_sq / path_n).cwiseSqrt();
   EvaluateMotion(c.sys, c.p, prior, *ws, c.o, kCurveStepS, &plan);
   const Eigen::VectorXd predicted = plan.curve.sigma.back();
-  Eigen::VectorXd err_sq = Eigen::VectorXd::Zero(c.p.size());
-  int inside = 0, total = 0;
-  const std::vector<int> scored = ScoredParams(c.o, static_cast<int>(c.p.size()));
+  ErrorTally tally(ScoredParams(c.o, static_cast<int>(c.p.size())), predicted);
   for (const auto& meas : runs) {
     BatchOptions bo;
     bo.prior = ParamPrior{c.p, prior};
     const BatchResult b = FitBatch(c.sys, plan.controls, meas, c.p, bo);
     ASSERT_TRUE(b.status.ok()) << b.status.message();
-    for (int i : scored) {
-      const double e = b.params[i] - c.p[i];
-      err_sq[i] += e * e;
-      inside += std::abs(e) <= 3.0 * predicted[i] ? 1 : 0;
-      ++total;
-    }
+    tally.Add(b.params, c.p);
   }
-  double pooled = 0.0;
-  for (int i : scored) {
+  for (int i : tally.scored) {
     std::cout << label << ": " << c.sys.params()[static_cast<size_t>(i)].name << " predicted "
-              << predicted[i] << ", realised " << std::sqrt(err_sq[i] / trials) << "\n";
-    pooled += err_sq[i] / (trials * predicted[i] * predicted[i]);
+              << predicted[i] << ", realised " << tally.Ratio(i) * predicted[i] << "\n";
   }
-  pooled = std::sqrt(pooled / static_cast<double>(scored.size()));
   std::cout << label << " through pixels (pose sigma along the path "
-            << c.o.info.pose_sigma.transpose() << "): pooled realised/predicted " << pooled << ", "
-            << inside << " of " << total << " errors inside 3 sigma, " << lost << " frames lost\n";
-  EXPECT_NEAR(pooled, 1.0, 0.2) << label;
-  EXPECT_GE(inside, total * 95 / 100) << label;
+            << c.o.info.pose_sigma.transpose() << "): pooled realised/predicted " << tally.Pooled()
+            << ", " << tally.inside << " of " << tally.total << " errors inside 3 sigma, " << lost
+            << " frames lost\n";
+  EXPECT_NEAR(tally.Pooled(), 1.0, 0.2) << label;
+  EXPECT_GE(tally.inside, tally.total * 95 / 100) << label;
   EXPECT_LT(lost, trials * static_cast<int>(times.size()) / 100) << label;
 }
 
