@@ -158,7 +158,14 @@ int main(int argc, char** argv) {
     const int rc = daemon.Run();
     const auto est = daemon.Estimate();
     if (!est.names.empty()) {
-      std::cout << "final estimate (" << est.update_count << " updates, " << est.filter << "):\n";
+      if (est.source == "batch") {
+        std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence << " over "
+                  << est.batch_poses << " poses of the run; the filter made " << est.update_count
+                  << " updates):\n";
+      } else {
+        std::cout << "final estimate: the filter's, no batch calibration yet (" << est.update_count
+                  << " updates, " << est.filter << "):\n";
+      }
       for (size_t i = 0; i < est.names.size(); ++i) {
         std::cout << "  " << est.names[i] << " = " << est.values[i] << " +- "
                   << std::sqrt(
@@ -166,6 +173,8 @@ int main(int argc, char** argv) {
                   << " " << est.units[i] << "\n";
       }
     }
+    std::cout << "shutdown: " << daemon.counters().batch_shutdown_ms
+              << " ms in the last batch calibration\n";
     return rc;
   } catch (const std::exception& e) {
     std::cerr << "kincald: error: " << e.what() << "\n";

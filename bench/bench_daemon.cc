@@ -13,8 +13,10 @@
 #include <thread>
 #include <vector>
 
+#include "daemon/batch_tier.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
+#include "kincal/io/recording.h"
 #include "kincal/vision/camera.h"
 
 namespace kincal::daemon {
@@ -147,10 +149,11 @@ void ReportLatency(benchmark::State& state, const DaemonCounters& c) {
   state.counters["frames_dropped"] = static_cast<double>(c.frames_dropped_queue);
 }
 
-// The frame-to-publish latency while the effect search runs in the background: the
+// The frame-to-publish latency while batch calibrations run in the background: the
 // simulated robot with a hidden lag (config/kincald_sim_lag.yaml, robot.effects: auto) at
-// --speed 1 for 100 s, during which the search runs and adds the lag.
-void BM_DaemonLatencyDuringEffectSearch(benchmark::State& state) {
+// --speed 1 for 100 s, during which the batch tier runs at 30 and 90 s of data (analyze's
+// selection, which adds the lag) and once more at shutdown.
+void BM_DaemonLatencyDuringBatch(benchmark::State& state) {
   DaemonCounters c{};
   for (auto _ : state) {
     DaemonConfig cfg =
@@ -163,8 +166,60 @@ void BM_DaemonLatencyDuringEffectSearch(benchmark::State& state) {
   }
   ReportLatency(state, c);
   state.counters["effects_added"] = static_cast<double>(c.effects_added);
+  state.counters["batch_runs"] = static_cast<double>(c.batch_runs);
 }
-BENCHMARK(BM_DaemonLatencyDuringEffectSearch)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_DaemonLatencyDuringBatch)->Unit(benchmark::kMillisecond)->Iterations(1);
+
+// One batch of the daemon's batch tier, with its defaults (one thread, analyze's options),
+// over the first 10 minutes of a real robot's motion (MR.CLAM dataset 6, motion capture
+// thinned to 10 Hz poses, its odometry commands as the controls): through the store, as
+// kincald runs it at shutdown. Args: robot, robot.effects: auto (1) or nothing (0).
+void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
+  const std::string dir = std::string(KINCAL_SOURCE_DIR) + "/../shared/data/mrclam/dataset6";
+  if (!std::filesystem::is_directory(dir)) {
+    state.SkipWithError(("no MR.CLAM data at " + dir).c_str());
+    return;
+  }
+  spdlog::set_level(spdlog::level::warn);
+  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0)));
+  BatchCalibration last;
+  for (auto _ : state) {
+    BatchTierOptions o;
+    o.auto_effects = state.range(1) != 0;
+    BatchTier tier(o, "unicycle", {}, {}, 2);
+    const TimeNs t0 = rec.poses.front().t_ns, end = t0 + SecondsToNs(600.0);
+    TimeNs next_pose = t0;
+    size_t c = 0;
+    for (const auto& p : rec.poses) {
+      if (p.t_ns > end) break;
+      for (; c < rec.controls.size() && rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(c))) <= p.t_ns; ++c) {
+        const auto& v = rec.controls.ValuesAt(static_cast<int>(c));
+        tier.AddControl(rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(c))),
+                        std::span<const double>(v.data(), 2));
+      }
+      if (p.t_ns < next_pose) continue;
+      next_pose = p.t_ns + 100'000'000;  // 10 Hz
+      tier.AddPose(p.t_ns, p.z);
+    }
+    const auto results = tier.Finish(end);
+    if (!results.empty()) last = results.back();
+  }
+  state.SetLabel(last.ok ? (last.accepted.empty() ? "none" : last.accepted.front() + "...")
+                         : "failed: " + last.error);
+  state.counters["batch_s"] = last.compute_s;
+  state.counters["poses"] = last.num_poses;
+  state.counters["effects_accepted"] = static_cast<double>(last.accepted.size());
+  state.counters["heldout_mm_before"] = 1e3 * last.heldout_before_m;
+  state.counters["heldout_mm_after"] = 1e3 * last.heldout_after_m;
+}
+BENCHMARK(BM_DaemonBatchMrclam10Min)
+    ->Args({1, 0})
+    ->Args({1, 1})
+    ->Args({5, 0})
+    ->Args({5, 1})
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1)
+    ->UseRealTime();
 
 void BM_DaemonLatencySpeed1(benchmark::State& state) {
   const std::string& log = Log();

@@ -74,6 +74,7 @@ def params():
     m.covariance = [[1e-10, 0.0], [0.0, 1e-10]]
     m.update_count = 3
     m.status = 1
+    m.source = 0
     return m.encode()
 
 

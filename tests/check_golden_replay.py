@@ -1,11 +1,15 @@
 """Replays tests/data/golden_replay.lcm through kincald and compares what it publishes with
-what the same log held when it was recorded: every pose, markers, params and model-check
-event, stamp and bytes, must be equal. A refactoring must leave it passing.
+what the same log held when it was recorded: every pose, markers, params, model-check and
+calibration event, stamp and bytes, must be equal. A refactoring must leave it passing;
+it guards against change, not against error (the other tests judge against the truth).
 
 Recorded 2026-11-23 before the daemon was split into stages; re-recorded 2026-11-24 when
 the filter stage's behaviour changed on purpose (issue 15: adaptive noise, robust updates,
 honest status, pose covariance calibrated to the residuals,
-model_check_t schema 2), by replaying the previous golden log through the new binary:
+model_check_t schema 2), and 2026-11-26 when the batch tier came (issue 31: params_t
+schema 3 with its source, STATUS_CONVERGED only when the filter agrees with a batch
+calibration, KINCAL_CALIBRATION compared too, less its wall time), each time by replaying
+the previous golden log through the new binary, so the log is the code's own output:
   kincald -c tests/data/kincald_golden.yaml --replay OLD --fast --record NEW --lcm-url memq://
 
   check_golden_replay.py KINCALD CONFIG GOLDEN_LOG LCMGEN_PYTHON SCRATCH_DIR
@@ -17,22 +21,33 @@ import sys
 
 import lcm
 
-OUTPUTS = ["KINCAL_POSE", "KINCAL_MARKERS", "KINCAL_PARAMS", "KINCAL_MODEL_CHECK"]
+OUTPUTS = ["KINCAL_POSE", "KINCAL_MARKERS", "KINCAL_PARAMS", "KINCAL_MODEL_CHECK",
+           "KINCAL_CALIBRATION"]
+
+
+def normalised(channel, data):
+    """The bytes that must replay identically: a batch calibration less its wall time."""
+    if channel != "KINCAL_CALIBRATION":
+        return data
+    from kincal import calibration_t
+    m = calibration_t.decode(data)
+    m.compute_s = 0.0
+    return m.encode()
 
 
 def load(path):
     events = collections.defaultdict(list)
     for e in lcm.EventLog(path, "r"):
-        events[e.channel].append((e.timestamp, e.data))
+        events[e.channel].append((e.timestamp, normalised(e.channel, e.data)))
     return events
 
 
 def describe(channel, data):
     """The decoded message, for a readable failure."""
     try:
-        from kincal import markers_t, model_check_t, params_t, pose_t
+        from kincal import calibration_t, markers_t, model_check_t, params_t, pose_t
         cls = {"KINCAL_POSE": pose_t, "KINCAL_MARKERS": markers_t, "KINCAL_PARAMS": params_t,
-               "KINCAL_MODEL_CHECK": model_check_t}[channel]
+               "KINCAL_MODEL_CHECK": model_check_t, "KINCAL_CALIBRATION": calibration_t}[channel]
         m = cls.decode(data)
         return {k: getattr(m, k) for k in m.__slots__ if k not in ("covariance",)}
     except Exception as e:  # the bytes differ so much that they do not decode

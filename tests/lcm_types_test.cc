@@ -25,6 +25,7 @@ TEST(LcmTypes, ParamsRoundTrip) {
   p.covariance = {{1e-10, 0, 0}, {0, 1e-10, 0}, {0, 0, 1.6e-9}};
   p.update_count = 77;
   p.status = kincal::params_t::STATUS_CONVERGED;
+  p.source = kincal::params_t::SOURCE_BATCH;
   std::vector<uint8_t> buf(static_cast<size_t>(p.getEncodedSize()));
   ASSERT_EQ(p.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
   kincal::params_t q;
@@ -33,6 +34,7 @@ TEST(LcmTypes, ParamsRoundTrip) {
   EXPECT_EQ(q.values, p.values);
   EXPECT_EQ(q.covariance, p.covariance);
   EXPECT_TRUE(q.status == kincal::params_t::STATUS_CONVERGED);
+  EXPECT_TRUE(q.source == kincal::params_t::SOURCE_BATCH);
   // Truncated buffers are rejected, not read past.
   EXPECT_LT(q.decode(buf.data(), 0, static_cast<int>(buf.size()) - 5), 0);
 }

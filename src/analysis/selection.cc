@@ -72,6 +72,7 @@ FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
   FitReport r;
   r.effects = effects;
   r.params = Estimates(sys, f, 0, sys.num_params());
+  if (f.cov_robust.rows() == f.p.size()) r.covariance = f.cov_robust;
   r.fit = e.fit;
   r.heldout = e.held;
   r.cost = f.cost;

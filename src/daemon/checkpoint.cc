@@ -27,6 +27,7 @@ void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& e
                     Checkpoint* c) {
   c->model = m.model;
   c->effects = effects;
+  c->source = m.source == kincal::params_t::SOURCE_BATCH ? "batch" : "filter";
   c->filter = m.estimator;
   c->utime = m.utime;
   c->update_count = m.update_count;
@@ -52,6 +53,11 @@ Status WriteCheckpoint(const std::string& path, const Checkpoint& c) {
   j["version"] = 1;
   j["model"] = c.model;
   j["effects"] = c.effects;
+  j["source"] = c.source;
+  if (c.source == "batch") {
+    j["batch_sequence"] = c.batch_sequence;
+    j["batch_poses"] = c.batch_poses;
+  }
   j["filter"] = c.filter;
   j["utime"] = c.utime;
   j["update_count"] = c.update_count;
@@ -146,6 +152,13 @@ Checkpoint ReadCheckpoint(const std::string& path) {
       throw std::runtime_error("unsupported version " + j.at("version").dump());
     c.model = j.at("model").get<std::string>();
     c.effects = j.at("effects").get<std::vector<std::string>>();
+    // Checkpoints before the batch tier have no source: the filter's.
+    c.source = j.value("source", std::string("filter"));
+    if (c.source != "filter" && c.source != "batch") {
+      throw std::runtime_error("source is '" + c.source + "', expected filter or batch");
+    }
+    c.batch_sequence = j.value("batch_sequence", 0);
+    c.batch_poses = j.value("batch_poses", 0);
     c.filter = j.at("filter").get<std::string>();
     c.utime = j.at("utime").get<int64_t>();
     c.update_count = j.at("update_count").get<int64_t>();
@@ -216,9 +229,15 @@ std::string CommentText(std::string s) {
 
 void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source) {
   out << "# kincal calibration of a " << CommentText(c.model) << " robot, from "
-      << CommentText(source) << "\n"
-      << "# " << c.update_count << " pose updates, filter " << CommentText(c.filter)
-      << "; sigma is 1-sigma.\n"
+      << CommentText(source) << "\n";
+  if (c.source == "batch") {
+    out << "# the batch calibration (batch " << c.batch_sequence << ", " << c.batch_poses
+        << " poses of the whole run, fitted as kincal analyze fits them); sigma is 1-sigma.\n";
+  } else {
+    out << "# the filter's estimate (" << c.update_count << " pose updates, filter "
+        << CommentText(c.filter) << "); sigma is 1-sigma.\n";
+  }
+  out << "source: " << YamlScalar(c.source) << "\n"
       << "model: " << YamlScalar(c.model) << "\n"
       << "effects: [";
   for (size_t i = 0; i < c.effects.size(); ++i) out << (i ? ", " : "") << YamlScalar(c.effects[i]);

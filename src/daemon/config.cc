@@ -164,6 +164,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("health_channel", &c.lcm.health_channel);
     s.Get("model_check_channel", &c.lcm.model_check_channel);
     s.Get("guidance_channel", &c.lcm.guidance_channel);
+    s.Get("calibration_channel", &c.lcm.calibration_channel);
     s.Get("markers_channel", &c.lcm.markers_channel);
     s.Get("frame_channel", &c.lcm.frame_channel);
     s.Get("publish_frames", &c.lcm.publish_frames);
@@ -297,6 +298,18 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("path", &c.checkpoint.path);
     s.Get("every_s", &c.checkpoint.every_s);
     s.Get("resume", &c.checkpoint.resume);
+    s.CheckUnknown();
+  }
+  {
+    auto s = top.Sub("calibration");
+    s.Get("enabled", &c.calibration.enabled);
+    s.Get("every_s", &c.calibration.every_s);
+    s.Get("first_s", &c.calibration.first_s);
+    s.Get("threads", &c.calibration.threads);
+    s.Get("max_effects", &c.calibration.max_effects);
+    s.Get("max_poses", &c.calibration.max_poses);
+    s.Get("max_controls", &c.calibration.max_controls);
+    s.Get("block_s", &c.calibration.block_s);
     s.CheckUnknown();
   }
   {

@@ -52,7 +52,7 @@ bool GuidanceFitsTheRobot(const DaemonConfig& c, std::string* error) {
 bool LcmOptions::IsValid(std::string* error) const {
   for (const auto* ch :
        {&controls_channel, &pose_channel, &params_channel, &health_channel, &model_check_channel,
-        &markers_channel, &frame_channel, &guidance_channel}) {
+        &markers_channel, &frame_channel, &guidance_channel, &calibration_channel}) {
     if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
                 error)) {
       return false;
@@ -178,6 +178,22 @@ bool CheckpointOptions::IsValid(std::string* error) const {
   return Expect(every_s > 0, "checkpoint.every_s must be > 0", error);
 }
 
+bool CalibrationOptions::IsValid(std::string* error) const {
+  return Expect(every_s >= 1 && every_s <= 86400, "calibration.every_s must be in [1, 86400] s",
+                error) &&
+         Expect(first_s >= 1 && first_s <= 86400, "calibration.first_s must be in [1, 86400] s",
+                error) &&
+         Expect(threads >= 1 && threads <= 64, "calibration.threads must be 1..64", error) &&
+         Expect(max_effects >= 0 && max_effects <= 8, "calibration.max_effects must be 0..8",
+                error) &&
+         Expect(max_poses >= 1000 && max_poses <= 10'000'000,
+                "calibration.max_poses must be 1000..10000000", error) &&
+         Expect(max_controls >= 1000 && max_controls <= 40'000'000,
+                "calibration.max_controls must be 1000..40000000", error) &&
+         Expect(block_s >= 0.5 && block_s <= 600, "calibration.block_s must be in [0.5, 600] s",
+                error);
+}
+
 bool GuidanceOptions::IsValid(std::string* error) const {
   if (!enabled) return true;
   if (!Expect(every_s > 0 && horizon_s > 0 && horizon_s <= 60,
@@ -240,7 +256,7 @@ bool DaemonConfig::IsValid(std::string* error) const {
     }
   }
   if (!queues.IsValid(error) || !record.IsValid(error) || !checkpoint.IsValid(error) ||
-      !guidance.IsValid(error)) {
+      !calibration.IsValid(error) || !guidance.IsValid(error)) {
     return false;
   }
   return GuidanceFitsTheRobot(*this, error);

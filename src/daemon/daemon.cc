@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <kincal/calibration_t.hpp>
 #include <kincal/health_t.hpp>
 #include <kincal/model_check_t.hpp>
 #include <lcm/lcm-cpp.hpp>
@@ -76,7 +77,8 @@ struct Daemon::Impl {
   std::mutex status_mu;  // guards what follows
   std::string source_error, model_check_evidence;
   std::string checkpoint_error;  // the last checkpoint write's failure (empty: written)
-  Checkpoint estimate;
+  Checkpoint estimate;           // the filter's, until there is a batch calibration
+  std::optional<Checkpoint> calibration;  // the batch tier's calibration in force
 
   std::optional<Checkpoint> resume;
   PathLock record_lock, checkpoint_lock;  // held for the daemon's life
@@ -175,6 +177,13 @@ struct Daemon::Impl {
       if (guidance) guidance->Offer(ck);
       if (drive) drive->Offer(ck);
     };
+    o.calibration = [this](int64_t utime, const kincal::calibration_t& m, const Checkpoint* good) {
+      if (good != nullptr) {
+        std::lock_guard lock(status_mu);
+        calibration = *good;
+      }
+      out.Publish(cfg.lcm.calibration_channel, utime, m);
+    };
     o.checkpoint_due = [this] { WriteCheckpointLogged(); };
     return o;
   }
@@ -203,11 +212,14 @@ struct Daemon::Impl {
     filter_done.store(true);
   }
 
+  // What a checkpoint and Estimate() give: the batch calibration once there is one.
+  Checkpoint CalibrationLocked() const { return calibration ? *calibration : estimate; }
+
   void WriteCheckpointLogged() {
     Checkpoint ck;
     {
       std::lock_guard lock(status_mu);
-      ck = estimate;
+      ck = CalibrationLocked();
     }
     if (ck.names.empty()) return;
     const Status written = WriteCheckpoint(cfg.checkpoint.path, ck);
@@ -401,7 +413,7 @@ int Daemon::Run() {
 
 Checkpoint Daemon::Estimate() const {
   std::lock_guard lock(impl_->status_mu);
-  return impl_->estimate;
+  return impl_->CalibrationLocked();
 }
 
 DaemonCounters Daemon::counters() const {

@@ -2,8 +2,13 @@
 
 #include <spdlog/spdlog.h>
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <limits>
+#include <map>
 #include <kincal/model_check_t.hpp>
 
 #include "daemon/messages.h"
@@ -35,8 +40,9 @@ constexpr double kRefitMaxCostFraction = 0.25;
 constexpr int kRobustAfterGated = 2;
 // Status DIVERGED: beyond the gate this many times filter.divergence_gated poses in a row.
 constexpr int kDivergedStreakFactor = 3;
-// An effect added online starts from the search's fit with its sigmas times this.
-constexpr double kAugmentSigmaInflation = 2.0;
+// The filter is re-centred on a batch calibration it is further from than this many
+// combined sigmas (of any parameter); "converged" needs it within.
+constexpr double kRecentreSigmas = 3.0;
 // Without an accepted re-fit, the running estimate restarts with its covariance times this.
 constexpr double kRestartCovarianceInflation = 4.0;
 // After a restart, this many accepted updates in a row end the divergence episode.
@@ -50,6 +56,22 @@ PoseNoiseAdaptationOptions AdaptationOptions(const FilterOptions& f) {
   PoseNoiseAdaptationOptions o;
   o.enabled = f.adaptive_noise;
   return o;
+}
+
+BatchTierOptions BatchTierOptionsFor(const FilterStageOptions& o) {
+  BatchTierOptions b = o.calibration;
+  b.auto_effects = o.auto_effects;
+  b.lossless = o.lossless;
+  return b;
+}
+
+// The prior's values by name: the batch starts where `kincal analyze --init` would.
+std::map<std::string, double> GuessByName(const System& sys, const FilterPrior& prior) {
+  std::map<std::string, double> guess;
+  for (int i = 0; i < sys.num_params(); ++i) {
+    guess[sys.params()[static_cast<size_t>(i)].name] = prior.mean[i];
+  }
+  return guess;
 }
 
 }  // namespace
@@ -89,6 +111,14 @@ FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
   o.checkpoint_path = c.checkpoint.path;
   o.checkpoint_every_s = c.checkpoint.every_s;
   o.auto_effects = c.robot.auto_effects;
+  o.calibration.enabled = c.calibration.enabled;
+  o.calibration.every_s = c.calibration.every_s;
+  o.calibration.first_s = c.calibration.first_s;
+  o.calibration.threads = c.calibration.threads;
+  o.calibration.max_effects = c.calibration.max_effects;
+  o.calibration.store.max_poses = c.calibration.max_poses;
+  o.calibration.store.max_controls = c.calibration.max_controls;
+  o.calibration.store.block_s = c.calibration.block_s;
   return o;
 }
 
@@ -98,7 +128,7 @@ bool FilterStageOptions::IsValid(std::string* error) const {
     *error = "the model check and checkpoint periods must be > 0";
     return false;
   }
-  return true;
+  return calibration.IsValid(error);
 }
 
 FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPrior prior,
@@ -121,7 +151,8 @@ FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPr
       time_base_(max_gap_ns_),
       recent_(kRecentPoses),
       adapter_(AdaptationOptions(opt_.filter)),
-      online_(OnlineEffectsOptions{.enabled = opt_.auto_effects, .lossless = opt_.lossless}) {
+      batch_(BatchTierOptionsFor(opt_), std::string(sys.model().name()), opt_.effects,
+             GuessByName(sys, prior_), sys.num_controls()) {
   std::string invalid;
   KINCAL_CHECK(opt_.IsValid(&invalid), invalid.c_str());  // the daemon's config was validated
   const FilterOptions& f = opt_.filter;
@@ -164,7 +195,7 @@ void FilterStage::AddControlSample(const ControlSample& c) {
     counters_.controls_out_of_order.fetch_add(1);
     return;
   }
-  online_.AddControl(t, values, sys_->num_controls());
+  batch_.AddControl(t, values);
   time_base_.ControlUsed(t);
 }
 
@@ -185,7 +216,7 @@ void FilterStage::StartNewBase(const char* what, TimeNs t, TimeBase::Stream by) 
   high_noise_since_ = TimeBase::kNever;
   consecutive_gated_ = 0;
   last_update_ns_ = TimeBase::kNever;
-  online_.Reset();
+  batch_.NewBase();
   time_base_.StartNew(t, by);
   counters_.time_resets.fetch_add(1);
   spdlog::warn("{} jumped back by more than filter.max_pose_gap_s: new time base, parameters kept",
@@ -220,6 +251,7 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
              TimeBase::Stream::kPoses, now_mono_ns);
   }
   if (!cal_ || !time_base_.has_controls()) return;  // nothing to propagate with yet
+  bool used = true;
   if (!cal_->initialized()) {
     // Start only where the controls in force are known (not before the first sample).
     if (cal_->controls().empty() || cal_->controls().ToNs(cal_->controls().TimeAt(0)) > t) return;
@@ -232,9 +264,13 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
     counters_.run_resets.fetch_add(1);
     consecutive_gated_ = 0;
   } else {
-    Update(p, t);
-    if (auto found = online_.OnPose(t)) Augment(*found, p, t);
+    used = Update(p, t);
   }
+  last_pose_ = p;
+  // The batch sees the poses the filter used: an isolated pose beyond the gate (a
+  // reflection, a wrong match) is left out of both.
+  if (used) batch_.AddPose(t, p.xytheta);
+  if (auto done = batch_.OnPose(t)) ApplyBatch(*done, p, t);
   time_base_.PoseSeen(t);
   if (recent_.full()) recent_.pop();
   recent_.push(p);
@@ -247,12 +283,12 @@ void FilterStage::AddPose(const PoseSample& p, TimeNs now_mono_ns) {
   }
 }
 
-void FilterStage::Update(const PoseSample& p, TimeNs t) {
+bool FilterStage::Update(const PoseSample& p, TimeNs t) {
   const double dt_s = NsToSeconds(t - cal_->time_ns());
   const Eigen::Vector3d extra = adapter_.ExtraPsd();
   cal_->set_extra_pose_psd(extra);
   const UpdateResult r = cal_->AddPose(t, p.xytheta, p.covariance, opt_.filter.gate_nis);
-  if (!r.ok && !r.gated) return;  // not positive definite: nothing learnt
+  if (!r.ok && !r.gated) return true;  // not positive definite: nothing learnt
   adapter_.Add(r.innovation.head<3>(), r.innovation_cov.topLeftCorner<3, 3>(), p.covariance,
                extra * dt_s, dt_s);
   check_->Add(t, r, cal_->state(), cal_->controls());  // gated innovations are evidence too
@@ -262,17 +298,17 @@ void FilterStage::Update(const PoseSample& p, TimeNs t) {
     if (consecutive_gated_ >= opt_.filter.divergence_gated && restart_armed_) {
       counters_.poses_gated.fetch_add(1);
       Recover(p, t, /*diverged=*/true);
-      return;
+      return true;
     }
     if (consecutive_gated_ < kRobustAfterGated) {  // an isolated outlier: not used
       counters_.poses_gated.fetch_add(1);
-      return;
+      return false;
     }
     // Persistent: the model, not the pose, is off. Use the pose with its covariance
     // widened to bring it to the gate (a robust update), so the filter never stalls.
     const UpdateResult robust =
         cal_->AddPose(t, p.xytheta, p.covariance * (r.nis / opt_.filter.gate_nis), 0.0);
-    if (!robust.ok) return;
+    if (!robust.ok) return true;
     counters_.poses_downweighted.fetch_add(1);
   } else {
     consecutive_gated_ = 0;
@@ -281,6 +317,7 @@ void FilterStage::Update(const PoseSample& p, TimeNs t) {
   counters_.updates.fetch_add(1);
   ++accepted_in_row_;
   TrackEpisode(p, t);
+  return true;
 }
 
 // The innovations have run far beyond the prediction (the adaptive noise is high) for a
@@ -355,6 +392,22 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
   VecN<kMaxState> start = cal_->params();
   StateMat start_cov = kRestartCovarianceInflation * cal_->params_covariance();
   std::string how = "the running estimate (no re-fit: too few poses)";
+  std::string fallback = "the running estimate";
+  if (calibration_ && calibration_->effects == effects_) {
+    // The whole run's calibration is a better place to restart from than the filter's
+    // recent opinion (which is what diverged).
+    for (size_t i = 0; i < calibration_->params.size(); ++i) {
+      const int a = sys_->ParamIndex(calibration_->params[i].name);
+      start[a] = calibration_->params[i].value;
+      for (size_t k = 0; k < calibration_->params.size(); ++k) {
+        start_cov(a, sys_->ParamIndex(calibration_->params[k].name)) =
+            kRestartCovarianceInflation *
+            calibration_->covariance(static_cast<int>(i), static_cast<int>(k));
+      }
+    }
+    fallback = "batch calibration " + std::to_string(calibration_->sequence);
+    how = fallback + " (no re-fit: too few poses)";
+  }
   if (meas.size() >= kRefitMinPoses) {
     BatchOptions bo;
     bo.huber_scale = kRefitHuberSigmas;
@@ -374,7 +427,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
           NsToSeconds(t - high_noise_since_), why);
       return;
     } else {
-      how = "the running estimate (re-fit not used: " + why + ")";
+      how = fallback + " (re-fit not used: " + why + ")";
     }
   } else if (!diverged) {
     restart_armed_ = false;
@@ -418,8 +471,10 @@ int FilterStage::ParamsStatus(bool sigmas_small, TimeNs t) const {
   }
   const bool updated_recently =
       last_update_ns_ != TimeBase::kNever && t - last_update_ns_ <= max_gap_ns_;
+  // Converged: the filter has settled, the model check finds nothing, and the filter agrees
+  // with the whole run's batch calibration (none yet: not converged).
   if (sigmas_small && updated_recently && consecutive_gated_ == 0 && verdict.consistent &&
-      adapter_.level() < kAdequateNoiseLevel) {
+      adapter_.level() < kAdequateNoiseLevel && DisagreementSigmas(nullptr) <= kRecentreSigmas) {
     return kincal::params_t::STATUS_CONVERGED;
   }
   return kincal::params_t::STATUS_CONVERGING;
@@ -465,19 +520,121 @@ void FilterStage::PublishModelCheck(TimeNs t) {
     m.heldout_after_m.push_back(a.heldout_after_m);
   }
   out_.model_check(utime, m);
-  if (cal_ && cal_->initialized()) {
-    online_.OnCheck(t, verdict, recent_, *sys_, cal_->params(), effects_);
+}
+
+// ---- the batch tier ----------------------------------------------------------------------
+
+// The filter starts again on `sys` from (mean, cov) at pose p, keeping the control history.
+void FilterStage::StartFilterAt(const std::shared_ptr<const System>& sys,
+                                const VecN<kMaxState>& mean, const StateMat& cov,
+                                const PoseSample& p, TimeNs t) {
+  auto cal =
+      std::make_unique<OnlineCalibrator>(*sys, calibrator_options_, cal_->controls().origin_ns());
+  cal->controls() = cal_->controls();
+  cal->Initialize(t, p.xytheta, p.covariance, mean, cov);
+  cal_ = std::move(cal);
+  if (sys != sys_) check_ = std::make_unique<ModelCheck>(*sys);
+  sys_ = sys;
+  adapter_.Reset();
+  consecutive_gated_ = 0;
+  high_noise_since_ = TimeBase::kNever;
+}
+
+double FilterStage::DisagreementSigmas(std::string* worst) const {
+  if (!calibration_ || !cal_ || !cal_->initialized() || calibration_->effects != effects_) {
+    return std::numeric_limits<double>::infinity();
+  }
+  const VecN<kMaxState> f = cal_->params();
+  const StateMat fc = cal_->params_covariance();
+  double most = 0.0;
+  for (size_t i = 0; i < calibration_->params.size(); ++i) {
+    const ParamEstimate& b = calibration_->params[i];
+    const int k = sys_->ParamIndex(b.name);
+    if (k < 0) return std::numeric_limits<double>::infinity();
+    const double z = std::abs(f[k] - b.value) / std::sqrt(fc(k, k) + b.sigma * b.sigma);
+    if (!(z <= most)) {
+      most = z;
+      if (worst != nullptr) *worst = b.name;
+    }
+  }
+  return most;
+}
+
+void FilterStage::PublishCalibration(const BatchCalibration& r, TimeNs t) {
+  const BatchCalibration* good = calibration_ ? &*calibration_ : nullptr;
+  FillCalibrationMessage(r, good, std::string(sys_->model().name()),
+                         batch_.store().poses_thinned(), &calibration_msg_);
+  if (good != nullptr) {
+    kincal::params_t m;
+    FillParamsFromCalibration(*good, std::string(sys_->model().name()), counters_.updates.load(),
+                              PipelineNsToUtime(t), &m);
+    FillCheckpoint(m, good->effects, &calibration_checkpoint_);
+    calibration_checkpoint_.batch_sequence = good->sequence;
+    calibration_checkpoint_.batch_poses = good->num_poses;
+  }
+  if (out_.calibration) {
+    out_.calibration(calibration_msg_.utime, calibration_msg_,
+                     good != nullptr ? &calibration_checkpoint_ : nullptr);
   }
 }
 
-// An effect found online: the filter starts again on the augmented model, from the search's
-// fit (its sigmas widened: the window was short), keeping the control history.
-void FilterStage::Augment(const EffectSearchResult& r, const PoseSample& p, TimeNs t) {
-  std::vector<std::string> effects = effects_;
-  effects.insert(effects.end(), r.added.begin(), r.added.end());
+// A batch calibration: published; then the filter follows it when they differ (its model,
+// or its values beyond kRecentreSigmas of their combined sigmas). A failed batch leaves the
+// last good calibration in place and says why.
+void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, TimeNs t) {
+  counters_.batch_runs.fetch_add(1);
+  if (!r.ok) {
+    counters_.batch_failed.fetch_add(1);
+    spdlog::warn("batch calibration {} failed ({}); {}", r.sequence, r.error,
+                 calibration_ ? "the calibration of batch " +
+                                    std::to_string(calibration_->sequence) + " stays"
+                              : std::string("no calibration yet"));
+    PublishCalibration(r, t);
+    return;
+  }
+  calibration_ = r;
+  PublishCalibration(r, t);
+  spdlog::info(
+      "batch calibration {}: {} poses in {:.1f} s; held-out error {:.2f} mm -> {:.2f} mm{}",
+      r.sequence, r.num_poses, r.compute_s, 1e3 * r.heldout_before_m, 1e3 * r.heldout_after_m,
+      r.accepted.empty() ? std::string() : fmt::format(" with {}", fmt::join(r.accepted, ", ")));
+  if (!cal_ || !cal_->initialized()) return;
+  if (r.effects != effects_) {
+    Rebuild(r, p, t);
+    return;
+  }
+  std::string worst;
+  const double z = DisagreementSigmas(&worst);
+  if (z > kRecentreSigmas) {
+    spdlog::info("the filter's {} is {:.1f} sigma from batch calibration {}: re-centred on it",
+                 worst, z, r.sequence);
+    Recentre(r, p, t);
+  }
+}
+
+void FilterStage::Recentre(const BatchCalibration& r, const PoseSample& p, TimeNs t) {
+  const int np = sys_->num_params();
+  VecN<kMaxState> mean = cal_->params();
+  StateMat cov = StateMat::Zero(np, np);
+  for (size_t i = 0; i < r.params.size(); ++i) {
+    const int a = sys_->ParamIndex(r.params[i].name);
+    mean[a] = r.params[i].value;
+    for (size_t k = 0; k < r.params.size(); ++k) {
+      cov(a, sys_->ParamIndex(r.params[k].name)) =
+          r.covariance(static_cast<int>(i), static_cast<int>(k));
+    }
+  }
+  StartFilterAt(sys_, mean, cov, p, t);
+  counters_.filter_recentres.fetch_add(1);
+}
+
+// The batch's model differs from the filter's (effects accepted or no longer supported):
+// the filter starts again on the batch's model from its calibration, keeping the control
+// history.
+void FilterStage::Rebuild(const BatchCalibration& r, const PoseSample& p, TimeNs t) {
   std::unique_ptr<System> made;
-  if (const Status s = MakeSystem(sys_->model().name(), effects, {}, &made); !s.ok()) {
-    spdlog::warn("effect search proposed {}: {}", r.added.front(), s.message());
+  if (const Status s = MakeSystem(sys_->model().name(), r.effects, {}, &made); !s.ok()) {
+    spdlog::warn("batch calibration {}: its model cannot run: {}", r.sequence, s.message());
     return;
   }
   const std::shared_ptr<const System> sys = std::move(made);
@@ -487,43 +644,59 @@ void FilterStage::Augment(const EffectSearchResult& r, const PoseSample& p, Time
   Eigen::VectorXd prior_sigma(np);
   for (int i = 0; i < np; ++i) {
     const ParamInfo& info = sys->params()[static_cast<size_t>(i)];
-    mean[i] = info.default_value;
-    double sigma = info.default_sigma;
-    for (const auto& e : r.params) {
-      if (e.name == info.name) mean[i] = e.value, sigma = e.sigma;
-    }
-    cov(i, i) = std::pow(kAugmentSigmaInflation * sigma, 2);
+    mean[i] = r.params[static_cast<size_t>(i)].value;
+    for (int k = 0; k < np; ++k) cov(i, k) = r.covariance(i, k);
     const int old = sys_->ParamIndex(info.name);
     prior_sigma[i] = old >= 0 ? prior_sigma_[old] : info.default_sigma;
   }
-  auto cal =
-      std::make_unique<OnlineCalibrator>(*sys, calibrator_options_, cal_->controls().origin_ns());
-  cal->controls() = cal_->controls();
-  cal->Initialize(t, p.xytheta, p.covariance, mean, cov);
-  auto check = std::make_unique<ModelCheck>(*sys);
-  cal_ = std::move(cal);
-  check_ = std::move(check);
-  sys_ = sys;
-  effects_ = std::move(effects);
+  const std::vector<std::string> before = effects_;
+  StartFilterAt(sys, mean, cov, p, t);
+  effects_ = r.effects;
   prior_sigma_ = prior_sigma;
-  adapter_.Reset();
-  consecutive_gated_ = 0;
   restart_armed_ = true;
-  high_noise_since_ = TimeBase::kNever;
-  for (const auto& name : r.added) {
-    added_.push_back({name, PipelineNsToUtime(t), r.heldout_before_m, r.heldout_after_m});
-    counters_.effects_added.fetch_add(1);
-    spdlog::info(
-        "added {} online: held-out error {:.4f} m -> {:.4f} m; filter restarted on the "
-        "augmented model",
-        name, r.heldout_before_m, r.heldout_after_m);
+  std::vector<AddedEffect> added;
+  for (const auto& name : r.accepted) {
+    AddedEffect a{name, PipelineNsToUtime(t), r.heldout_before_m, r.heldout_after_m};
+    for (const auto& old : added_) {
+      if (old.name == name) a = old;  // added before: keeps when and what it changed then
+    }
+    if (std::find(before.begin(), before.end(), name) == before.end()) {
+      counters_.effects_added.fetch_add(1);
+      spdlog::info("added {}: held-out error {:.4f} m -> {:.4f} m; filter restarted on the model",
+                   name, r.heldout_before_m, r.heldout_after_m);
+    }
+    added.push_back(a);
   }
+  for (const auto& name : before) {
+    if (std::find(r.effects.begin(), r.effects.end(), name) != r.effects.end()) continue;
+    counters_.effects_removed.fetch_add(1);
+    spdlog::info("removed {}: batch calibration {} no longer supports it", name, r.sequence);
+  }
+  added_ = std::move(added);
 }
 
+// At shutdown: the last batch over the whole run, then the final parameters. With a batch
+// calibration the last params_t carries it (source SOURCE_BATCH): what a user reads at the
+// end of a run is what the data say, not the filter's recent opinion.
 void FilterStage::Finish() {
   if (!cal_ || !cal_->initialized()) return;
-  PublishParams(time_base_.last_pose_ns(), true);
+  const TimeNs t = time_base_.last_pose_ns();
+  const auto began = std::chrono::steady_clock::now();
+  for (const BatchCalibration& r : batch_.Finish(t)) ApplyBatch(r, last_pose_, t);
+  counters_.batch_shutdown_ms.fetch_add(std::chrono::duration_cast<std::chrono::milliseconds>(
+                                            std::chrono::steady_clock::now() - began)
+                                            .count());
+  PublishParams(t, true);
+  if (calibration_) PublishFinalCalibration(t);
   if (!opt_.checkpoint_path.empty()) out_.checkpoint_due();
+}
+
+void FilterStage::PublishFinalCalibration(TimeNs t) {
+  kincal::params_t& m = params_msg_;
+  FillParamsFromCalibration(*calibration_, std::string(sys_->model().name()),
+                            counters_.updates.load(), PipelineNsToUtime(t), &m);
+  m.status = static_cast<int8_t>(status_.load());
+  out_.params(m.utime, m);
 }
 
 }  // namespace kincal::daemon

@@ -8,18 +8,25 @@
 //   AddPose     a pose: initialise, new run, update or gate, recovery, publish
 //   Recover     after filter.divergence_gated gated poses in a row (real divergence, at most
 //               once per episode): batch re-fit if its window informs every parameter and
-//               explains the recent poses better, else the running estimate; restart
-//   Finish      the final estimate and checkpoint
+//               explains the recent poses better, else the batch calibration (or the
+//               running estimate before there is one); restart
+//   ApplyBatch  a batch calibration (batch_tier.h: the whole run as `kincal analyze` fits
+//               it): published; the filter re-centred on it when the two disagree beyond
+//               their sigmas, re-initialised on its model when its effects differ
+//   Finish      a last batch over the whole run, then the final estimate (the batch
+//               calibration) and checkpoint
 #pragma once
 
 #include <atomic>
 #include <functional>
+#include <kincal/calibration_t.hpp>
 #include <kincal/params_t.hpp>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "daemon/counters.h"
-#include "daemon/online_effects.h"
+#include "daemon/batch_tier.h"
 #include "daemon/pose_ring.h"
 #include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
@@ -57,7 +64,8 @@ struct FilterStageOptions {
   double model_check_every_s = 1.0;  // a model_check_t this often (the health rate)
   std::string checkpoint_path;       // empty: no checkpoints
   double checkpoint_every_s = 10.0;
-  bool auto_effects = false;  // robot.effects: auto (online_effects.h)
+  bool auto_effects = false;  // robot.effects: auto (the batch tier's selection)
+  BatchTierOptions calibration;  // the batch tier (batch_tier.h)
   bool lossless = false;      // a replay with --fast: online decisions at fixed data times
   bool IsValid(std::string* error) const;
 };
@@ -71,6 +79,10 @@ struct FilterOutputs {
   std::function<void(int64_t utime, const kincal::params_t&)> params;
   std::function<void(int64_t utime, const kincal::model_check_t&)> model_check;
   std::function<void(const Checkpoint&)> estimate;  // after every params publication
+  // After every batch: its message, and the calibration in force (the last good batch) as
+  // a checkpoint, null while there is none.
+  std::function<void(int64_t utime, const kincal::calibration_t&, const Checkpoint* in_force)>
+      calibration;
   std::function<void()> checkpoint_due;             // every checkpoint.every_s (if a path is set)
 };
 
@@ -102,23 +114,35 @@ class FilterStage {
   int status() const { return status_.load(); }
   // The model as it runs now (with the effects added online).
   const System& system() const { return *sys_; }
+  // The batch tier (its store, the batches started).
+  const BatchTier& batch() const { return batch_; }
   TimeNs held_since_mono_ns() const { return time_base_.held_since_mono_ns(); }
 
  private:
   void AddControlSample(const ControlSample& c);
   void TakeJump(const char* what, TimeNs t, TimeBase::Stream by, TimeNs now_mono_ns);
   void StartNewBase(const char* what, TimeNs t, TimeBase::Stream by);
-  void Update(const PoseSample& p, TimeNs t);
+  // False when the pose was an isolated outlier (gated, not used).
+  bool Update(const PoseSample& p, TimeNs t);
   void TrackEpisode(const PoseSample& p, TimeNs t);
   void Recover(const PoseSample& p, TimeNs t, bool diverged);
   std::vector<PoseMeasurement> RecentMeasurements(TimeNs t) const;
   bool RefitIsBetter(const BatchResult& refit, const std::vector<PoseMeasurement>& meas,
                      std::string* why) const;
   void PublishParams(TimeNs t, bool force);
+  void PublishFinalCalibration(TimeNs t);
   void PublishModelCheck(TimeNs t);
   int ParamsStatus(bool sigmas_small, TimeNs t) const;
   bool ModelInadequate(const ModelCheckVerdict& v) const;
-  void Augment(const EffectSearchResult& r, const PoseSample& p, TimeNs t);
+  void ApplyBatch(const BatchCalibration& r, const PoseSample& p, TimeNs t);
+  void PublishCalibration(const BatchCalibration& r, TimeNs t);
+  void Rebuild(const BatchCalibration& r, const PoseSample& p, TimeNs t);
+  void Recentre(const BatchCalibration& r, const PoseSample& p, TimeNs t);
+  // The largest |filter - batch| over their combined sigma, parameter by parameter
+  // (infinity when the models differ or there is no batch calibration).
+  double DisagreementSigmas(std::string* worst) const;
+  void StartFilterAt(const std::shared_ptr<const System>& sys, const VecN<kMaxState>& mean,
+                     const StateMat& cov, const PoseSample& p, TimeNs t);
 
   std::shared_ptr<const System> sys_;  // replaced when an effect is added online
   std::vector<std::string> effects_;   // declared, then those added online
@@ -136,7 +160,11 @@ class FilterStage {
   std::unique_ptr<ModelCheck> check_;
   PoseRing recent_;  // poses the filter used, for a batch re-fit when it diverges
   PoseNoiseAdapter adapter_;
-  OnlineEffects online_;
+  BatchTier batch_;
+  std::optional<BatchCalibration> calibration_;  // the last good batch
+  Checkpoint calibration_checkpoint_;            // the same, as a checkpoint
+  kincal::calibration_t calibration_msg_{};
+  PoseSample last_pose_;  // the newest pose the filter took (a restart's starting pose)
   std::vector<AddedEffect> added_;
   int consecutive_gated_ = 0;
   bool restart_armed_ = true;  // one restart per divergence episode

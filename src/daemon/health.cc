@@ -42,7 +42,7 @@ std::string SummaryLine(const DaemonCounters& c) {
 void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
                            int64_t utime, kincal::health_t* h) {
   *h = kincal::health_t{};
-  h->schema_version = 6;
+  h->schema_version = 7;
   h->utime = utime;
   h->source = s.source_name;
   h->frame_rate_hz = static_cast<double>(now.frames_captured - prev_.frames_captured) / period_s;

@@ -2,6 +2,7 @@
 // fills a message the caller keeps and reuses (vectors keep their capacity).
 #pragma once
 
+#include <kincal/calibration_t.hpp>
 #include <kincal/frame_t.hpp>
 #include <kincal/guidance_t.hpp>
 #include <kincal/health_t.hpp>
@@ -13,6 +14,7 @@
 #include <string_view>
 #include <vector>
 
+#include "daemon/batch_worker.h"
 #include "kincal/analysis/model_check.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
@@ -35,6 +37,16 @@ void FillMarkersMessage(const PoseSample& p, double sigma_px, kincal::markers_t*
 void FillParamsMessage(const System& sys, const StateVec& state, const StateMat& covariance,
                        std::string_view estimator, int64_t update_count, int64_t utime,
                        kincal::params_t* m);
+// A batch's message: what this batch did (`run`: sequence, success or why not, its data,
+// its time), and the calibration in force (`good`: the last good batch, null when none;
+// model, effects, parameters, the effects accepted and the held-out errors).
+void FillCalibrationMessage(const BatchCalibration& run, const BatchCalibration* good,
+                            const std::string& model, int64_t poses_thinned,
+                            kincal::calibration_t* m);
+// A batch calibration as a params_t (source SOURCE_BATCH, estimator "batch"); the status
+// is the caller's to set.
+void FillParamsFromCalibration(const BatchCalibration& c, const std::string& model,
+                               int64_t update_count, int64_t utime, kincal::params_t* m);
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,
                                         int64_t utime);
 // "model+effect+effect", as model_check_t and guidance_t name the system in use.

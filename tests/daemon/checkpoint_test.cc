@@ -99,7 +99,7 @@ TEST(Checkpoint, ExportEscapesEveryString) {
   EXPECT_NE(y.find("unit: \"m\\\"\\nx: 1\"}"), std::string::npos) << y;
   EXPECT_NE(y.find("effects: [\"actuator_lag[omega_l]\"]"), std::string::npos) << y;
   EXPECT_NE(y.find("from a?b\n"), std::string::npos) << y;
-  EXPECT_EQ(std::count(y.begin(), y.end(), '\n'), 13) << y;  // no line was split
+  EXPECT_EQ(std::count(y.begin(), y.end(), '\n'), 14) << y;  // no line was split
 }
 
 TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
@@ -127,6 +127,50 @@ TEST(Checkpoint, RoundTripsAtomicallyAndExportsYaml) {
       << yaml.str();
   std::ofstream(path) << "{\"format\": \"kincal-checkpoint\", \"version\": 1, \"model\": 3}";
   EXPECT_THROW(ReadCheckpoint(path), std::runtime_error);
+}
+
+// A batch calibration's checkpoint says whose it is, through the file and the export; an
+// older checkpoint without a source is the filter's; an unknown source is refused.
+TEST(Checkpoint, SaysWhoseEstimateItIs) {
+  Checkpoint c = Good();
+  c.source = "batch";
+  c.batch_sequence = 4;
+  c.batch_poses = 1800;
+  const std::string path = TempPath("ck_batch.json");
+  ASSERT_TRUE(WriteCheckpoint(path, c).ok());
+  const Checkpoint r = ReadCheckpoint(path);
+  EXPECT_EQ(r.source, "batch");
+  EXPECT_EQ(r.batch_sequence, 4);
+  EXPECT_EQ(r.batch_poses, 1800);
+  std::ostringstream yaml;
+  WriteExportYaml(yaml, r, path);
+  EXPECT_NE(yaml.str().find("# the batch calibration (batch 4, 1800 poses"), std::string::npos)
+      << yaml.str();
+  EXPECT_NE(yaml.str().find("\nsource: batch\n"), std::string::npos) << yaml.str();
+
+  std::string text;
+  {
+    std::ifstream in(path);
+    text.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto erase_key = [&](const std::string& key) {
+    const size_t at = text.find("\"" + key + "\"");
+    ASSERT_NE(at, std::string::npos) << key;
+    text.erase(at, text.find('\n', at) - at + 1);
+  };
+  erase_key("source");
+  erase_key("batch_sequence");
+  erase_key("batch_poses");
+  std::ofstream(path) << text;
+  EXPECT_EQ(ReadCheckpoint(path).source, "filter");
+  c.source = "guess";
+  ASSERT_TRUE(WriteCheckpoint(path, c).ok());
+  try {
+    ReadCheckpoint(path);
+    ADD_FAILURE() << "an unknown source was read";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("source is 'guess'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Checkpoint, WritesNeverFollowALinkAndLeaveNoTemporaryOnFailure) {

@@ -48,6 +48,13 @@ TEST(Config, DocumentedExamplesLoadIntoTypedOptions) {
   EXPECT_TRUE(v4l2.IsValid(&error)) << error;
   EXPECT_EQ(v4l2.source, SourceKind::kV4l2);
   EXPECT_EQ(SourceName(v4l2.source), "v4l2");
+  // The batch tier's section (docs/daemon.md, "Two tiers").
+  EXPECT_TRUE(v4l2.calibration.enabled);
+  EXPECT_DOUBLE_EQ(v4l2.calibration.every_s, 60.0);
+  EXPECT_DOUBLE_EQ(v4l2.calibration.first_s, 30.0);
+  EXPECT_EQ(v4l2.calibration.max_poses, 108000);
+  EXPECT_EQ(v4l2.calibration.max_controls, 432000);
+  EXPECT_EQ(v4l2.lcm.calibration_channel, "KINCAL_CALIBRATION");
 }
 
 TEST(Config, EveryChoiceParsesFromItsName) {

@@ -24,6 +24,14 @@ TEST(Config, EachSectionSaysWhatItExpects) {
   EXPECT_FALSE(c.v4l2.IsValid(&error));
   EXPECT_EQ(error, "v4l2.pixel_format must be GREY, YUYV, MJPG, BGR3 or RGB3 (got 'PNG')");
   c = DaemonConfig{};
+  c.calibration.every_s = 0.5;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "calibration.every_s must be in [1, 86400] s");
+  c = DaemonConfig{};
+  c.calibration.max_poses = 10;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "calibration.max_poses must be 1000..10000000");
+  c = DaemonConfig{};
   c.filter.type = "kalman";
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("filter.type: unknown filter 'kalman' (known: "), std::string::npos)

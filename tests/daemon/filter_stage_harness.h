@@ -8,6 +8,7 @@
 #include <kincal/model_check_t.hpp>
 #include <kincal/params_t.hpp>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,8 +42,11 @@ struct StageScenario {
 struct StageRun {
   std::vector<kincal::params_t> params;
   std::vector<kincal::model_check_t> checks;
+  std::vector<kincal::calibration_t> calibrations;
   DaemonCounters counters;
-  Checkpoint estimate;
+  Checkpoint filter_estimate;              // the filter's last
+  std::optional<Checkpoint> calibration;   // the batch calibration in force at the end
+  Checkpoint estimate;  // what kincald would checkpoint: the calibration, else the filter's
   // The last published value of a parameter.
   double Final(const std::string& name) const {
     for (size_t i = 0; i < estimate.names.size(); ++i) {
@@ -132,7 +136,11 @@ inline FilterOutputs Collect(StageRun* run) {
   FilterOutputs out;
   out.params = [run](int64_t, const kincal::params_t& m) { run->params.push_back(m); };
   out.model_check = [run](int64_t, const kincal::model_check_t& m) { run->checks.push_back(m); };
-  out.estimate = [run](const Checkpoint& ck) { run->estimate = ck; };
+  out.estimate = [run](const Checkpoint& ck) { run->filter_estimate = ck; };
+  out.calibration = [run](int64_t, const kincal::calibration_t& m, const Checkpoint* good) {
+    run->calibrations.push_back(m);
+    if (good != nullptr) run->calibration = *good;
+  };
   out.checkpoint_due = [] {};
   return out;
 }
@@ -140,9 +148,9 @@ inline FilterOutputs Collect(StageRun* run) {
 // Runs the filter stage on the simulated samples, each pose once the controls up to its
 // time are queued (as the filter thread hands them over), with `options` (effects from
 // the scenario).
-inline StageRun RunStage(const StageScenario& sc, FilterStageOptions options) {
+inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
+                           FilterStageOptions options) {
   const System est = MakeSystem(sc.model, sc.declared);
-  const Samples samples = Simulate(sc);
   options.effects = sc.declared;
   options.auto_effects = sc.auto_effects;
   options.lossless = true;  // one thread feeds the stage: decisions at fixed data times
@@ -170,7 +178,12 @@ inline StageRun RunStage(const StageScenario& sc, FilterStageOptions options) {
   }
   stage.Finish();
   run.counters = counters.Load();
+  run.estimate = run.calibration ? *run.calibration : run.filter_estimate;
   return run;
+}
+
+inline StageRun RunStage(const StageScenario& sc, FilterStageOptions options) {
+  return RunStageOn(Simulate(sc), sc, std::move(options));
 }
 
 // The daemon's defaults for the stage, as the shipped simulated config sets them.

@@ -81,6 +81,9 @@ struct ErrorStats {
 struct FitReport {
   std::vector<std::string> effects;  // effect specs in the model
   std::vector<ParamEstimate> params;
+  // The parameters' cluster-robust covariance (params' order; empty when the fit gave
+  // none): the sigmas above are its diagonal.
+  Eigen::MatrixXd covariance;
   ErrorStats fit, heldout;
   double cost = 0.0;  // sum of squared whitened residuals over the fit windows
   int fit_windows = 0;

@@ -21,6 +21,12 @@ namespace kincal::daemon {
 struct Checkpoint {
   std::string model;
   std::vector<std::string> effects;
+  // Whose estimate: "batch" (kincald's batch tier, kincal.calibration_t: the whole run
+  // fitted as `kincal analyze` fits it) or "filter" (the real-time filter's, before the
+  // first batch calibration).
+  std::string source = "filter";
+  int batch_sequence = 0;  // source "batch": the batch it comes from
+  int batch_poses = 0;     // source "batch": the poses it was fitted to
   std::string filter;
   int64_t utime = 0;  // of the last update, us, host realtime clock
   int64_t update_count = 0;
@@ -30,7 +36,7 @@ struct Checkpoint {
 };
 
 // The estimate a kincal.params_t carries (model, filter, time, values and covariance by
-// name); `effects` are not in the message. Reuses *c's storage.
+// name; source from the message); `effects` are not in the message. Reuses *c's storage.
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c);
 

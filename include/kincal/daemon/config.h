@@ -37,6 +37,7 @@ struct LcmOptions {
   std::string health_channel = "KINCAL_HEALTH";
   std::string model_check_channel = "KINCAL_MODEL_CHECK";
   std::string guidance_channel = "KINCAL_GUIDANCE";
+  std::string calibration_channel = "KINCAL_CALIBRATION";  // the batch tier's calibration_t
   std::string markers_channel = "KINCAL_MARKERS";
   std::string frame_channel = "KINCAL_FRAME";
   bool publish_frames = false;  // frames go to the log; on the network only if asked
@@ -175,6 +176,23 @@ struct CheckpointOptions {
   bool IsValid(std::string* error) const;
 };
 
+// The batch tier (the daemon's calibration): every every_s of data time (the first once
+// the run spans first_s, and once more at shutdown) the run's poses and controls are fitted
+// as `kincal analyze` fits them, on a worker thread, and published as kincal.calibration_t
+// on lcm.calibration_channel. The store keeps max_poses / max_controls at most (thinned
+// evenly over the run in blocks of block_s when full): memory is bounded by these.
+struct CalibrationOptions {
+  bool enabled = true;
+  double every_s = 60.0;
+  double first_s = 30.0;
+  int threads = 1;      // the fit's threads (the result does not depend on them)
+  int max_effects = 4;  // robot.effects: auto: effects the selection may accept
+  int max_poses = 108'000;     // 1 h at 30 Hz
+  int max_controls = 432'000;  // 1 h at 120 Hz
+  double block_s = 4.0;
+  bool IsValid(std::string* error) const;
+};
+
 // Online guidance: every every_s of data time the running estimate is handed to a worker
 // thread that answers what `kincal plan --advise` answers (kincal/plan/advice.h) and
 // publishes it as kincal.guidance_t on lcm.guidance_channel.
@@ -215,6 +233,7 @@ struct DaemonConfig {
   QueueOptions queues;
   RecordOptions record;
   CheckpointOptions checkpoint;
+  CalibrationOptions calibration;
   GuidanceOptions guidance;
   double health_rate_hz = 1.0;
   double no_target_warn_s = 5.0;  // health is not ok after this long (frame time) without target

@@ -41,6 +41,11 @@ namespace kincal::daemon {
   X(discarded_at_reset, "poses and controls still on the old time base after one")           \
   X(source_restarts, "the device failed and was reopened")                                   \
   X(effects_added, "effects added online (robot.effects: auto)")                             \
+  X(effects_removed, "effects removed again: a later batch no longer supported them")        \
+  X(batch_runs, "batch calibrations run (calibration.every_s and at shutdown)")              \
+  X(batch_failed, "batch calibrations that failed: the last good one stays")                 \
+  X(filter_recentres, "the filter disagreed with a batch calibration and was re-centred")    \
+  X(batch_shutdown_ms, "wall time at shutdown spent on the last batch calibrations, ms")     \
   X(controls_received, "control messages accepted")                                          \
   X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)")   \
   X(controls_out_of_order, "controls older than the newest one: ignored")                    \

@@ -1,0 +1,97 @@
+#include "daemon/batch_tier.h"
+
+#include <spdlog/spdlog.h>
+
+namespace kincal::daemon {
+
+bool BatchTierOptions::IsValid(std::string* error) const {
+  if (!(every_s >= 1.0) || !(first_s >= 1.0) || !(apply_after_s >= 0.0)) {
+    *error = "calibration.every_s and calibration.first_s must be >= 1 s";
+    return false;
+  }
+  if (threads < 1 || max_effects < 0) {
+    *error = "calibration.threads must be >= 1";
+    return false;
+  }
+  return store.IsValid(error);
+}
+
+BatchTier::BatchTier(BatchTierOptions options, std::string model,
+                     std::vector<std::string> declared, std::map<std::string, double> guess,
+                     int num_controls)
+    : opt_(options),
+      model_(std::move(model)),
+      declared_(std::move(declared)),
+      init_(std::move(guess)),
+      store_(options.store, num_controls),
+      next_due_span_ns_(SecondsToNs(options.first_s)) {}
+
+void BatchTier::AddPose(TimeNs t_ns, const Eigen::Vector3d& xytheta) {
+  if (opt_.enabled) store_.AddPose(t_ns, xytheta);
+}
+
+AnalyzeOptions BatchTier::Options() const {
+  AnalyzeOptions o;  // kincal analyze's defaults otherwise
+  o.model = model_;
+  o.init = init_;
+  o.base_effects = declared_;
+  o.effects_mode = opt_.auto_effects ? "auto" : "none";
+  o.max_effects = opt_.max_effects;
+  o.num_threads = opt_.threads;
+  return o;
+}
+
+void BatchTier::StartBatch(TimeNs t_ns) {
+  const Recording data =
+      store_.Snapshot(t_ns, "kincald's run (" + std::to_string(store_.num_poses()) + " poses)");
+  if (worker_.Start(sequence_ + 1, data, Options())) {
+    ++sequence_;
+    started_span_ns_ = last_span_ns_ = store_.pose_span_ns();
+    next_due_span_ns_ = started_span_ns_ + SecondsToNs(opt_.every_s);
+  }
+}
+
+// Times on the pipeline's base.
+BatchCalibration BatchTier::Finished(BatchCalibration r) const {
+  r.data_begin_ns = ToPipeline(r.data_begin_ns);
+  r.data_end_ns = ToPipeline(r.data_end_ns);
+  return r;
+}
+
+std::optional<BatchCalibration> BatchTier::OnPose(TimeNs t_ns) {
+  if (!opt_.enabled) return std::nullopt;
+  std::optional<BatchCalibration> r;
+  if (running()) {
+    if (opt_.lossless) {
+      if (store_.pose_span_ns() >= started_span_ns_ + SecondsToNs(opt_.apply_after_s)) {
+        r = worker_.Wait();
+      }
+    } else {
+      r = worker_.Poll();
+    }
+    if (r) started_span_ns_ = -1;
+  }
+  if (!running() && store_.pose_span_ns() >= next_due_span_ns_) StartBatch(t_ns);
+  if (r) return Finished(std::move(*r));
+  return std::nullopt;
+}
+
+std::vector<BatchCalibration> BatchTier::Finish(TimeNs t_ns) {
+  std::vector<BatchCalibration> out;
+  if (!opt_.enabled || !store_.has_pose()) return out;
+  if (running()) {
+    out.push_back(Finished(worker_.Wait()));
+    started_span_ns_ = -1;
+  }
+  if (store_.pose_span_ns() == last_span_ns_) return out;  // the last batch saw it all
+  spdlog::info("batch calibration over the whole run ({} poses, {:.0f} s)", store_.num_poses(),
+               store_.span_s());
+  StartBatch(t_ns);
+  if (running()) {
+    out.push_back(Finished(worker_.Wait()));
+    started_span_ns_ = -1;
+  }
+  return out;
+}
+
+}  // namespace kincal::daemon

@@ -1,0 +1,91 @@
+// kincald's batch tier: the calibration the whole run supports, beside the filter's
+// real-time estimate. The filter stage hands it every control and pose it takes (kept in a
+// bounded CalibrationStore); every `every_s` of data time (the first once the run spans
+// `first_s`) a snapshot of all of it goes to the worker (batch_worker.h), which fits it as
+// `kincal analyze` does: the declared effects as the base, the configured guess as the
+// start and, with robot.effects: auto, analyze's own effect selection on all the data (so
+// an effect a later batch no longer supports is gone again).
+//
+// When a result is applied: live, at the first pose after it is ready; in a lossless
+// replay, at the first pose `apply_after_s` of data time after the batch started (the
+// filter thread waits for it there), so that a replay decides bit-identically every time.
+// Data time here is the store's: the newest pose's time since the run's first sample.
+#pragma once
+
+#include <map>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "daemon/batch_worker.h"
+#include "daemon/calibration_store.h"
+#include "kincal/time.h"
+
+namespace kincal::daemon {
+
+// One effect the batch tier added to the filter's model, for model_check_t.
+struct AddedEffect {
+  std::string name;
+  int64_t utime = 0;
+  double heldout_before_m = 0, heldout_after_m = 0;
+};
+
+struct BatchTierOptions {
+  bool enabled = true;
+  bool auto_effects = false;  // robot.effects: auto
+  bool lossless = false;      // a replay with --fast: results applied at fixed data times
+  double every_s = 60.0;      // data time between batches
+  double first_s = 30.0;      // the first batch once the run spans this much
+  double apply_after_s = 5.0;  // lossless: results applied this long after the start
+  int threads = 1;             // Analyze's threads (the result does not depend on them)
+  int max_effects = 4;         // effects the selection may accept
+  CalibrationStoreOptions store;
+  bool IsValid(std::string* error) const;
+};
+
+class BatchTier {
+ public:
+  // `model`, `declared` effects and the configured `guess` (by parameter name) are what
+  // `kincal analyze --model M --init GUESS` would be given.
+  BatchTier(BatchTierOptions options, std::string model, std::vector<std::string> declared,
+            std::map<std::string, double> guess, int num_controls);
+
+  void AddControl(TimeNs t_ns, std::span<const double> values) {
+    if (opt_.enabled) store_.AddControl(t_ns, values);
+  }
+  void AddPose(TimeNs t_ns, const Eigen::Vector3d& xytheta);
+  // A new time base (a clock jumped back): the store goes on after what it holds.
+  void NewBase() { store_.NewBase(); }
+
+  // At each pose (after AddPose): a finished batch to apply now, if any; then a new batch
+  // is started when one is due.
+  std::optional<BatchCalibration> OnPose(TimeNs t_ns);
+  // At shutdown: the running batch (if any), then one over everything stored, waited for.
+  std::vector<BatchCalibration> Finish(TimeNs t_ns);
+
+  bool running() const { return started_span_ns_ >= 0; }
+  int started() const { return sequence_; }
+  const CalibrationStore& store() const { return store_; }
+  // The store's time of a batch result (BatchCalibration::data_*_ns) on the current time
+  // base.
+  TimeNs ToPipeline(TimeNs store_ns) const { return store_ns - store_.offset_ns(); }
+
+ private:
+  void StartBatch(TimeNs t_ns);
+  BatchCalibration Finished(BatchCalibration r) const;
+  AnalyzeOptions Options() const;
+
+  BatchTierOptions opt_;
+  std::string model_;
+  std::vector<std::string> declared_;
+  std::map<std::string, double> init_;
+  CalibrationStore store_;
+  BatchWorker worker_;
+  int sequence_ = 0;
+  TimeNs started_span_ns_ = -1;  // the running batch's start (store span), -1: none
+  TimeNs last_span_ns_ = -1;     // the last batch's start (store span)
+  TimeNs next_due_span_ns_;
+};
+
+}  // namespace kincal::daemon

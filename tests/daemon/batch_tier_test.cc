@@ -1,0 +1,121 @@
+// BatchTier: when batches start (the first once the run spans first_s, then every every_s
+// of data time) and when their results apply (lossless: at a fixed data time after the
+// start, so that a replay decides the same every time); at shutdown, one more over
+// everything; the fit is analyze's on the same data.
+#include "daemon/batch_tier.h"
+
+#include <gtest/gtest.h>
+
+#include "analysis/analysis_test_util.h"
+
+namespace kincal::daemon {
+namespace {
+
+// A recording fed to the tier as the filter stage would, up to t_s; the results that
+// came back on the way.
+struct Fed {
+  explicit Fed(Recording r) : rec(std::move(r)) {}
+  Recording rec;
+  size_t next_control = 0, next_pose = 0;
+  std::vector<std::pair<double, BatchCalibration>> results;  // (data time s, result)
+  void Until(BatchTier* tier, double t_s) {
+    const TimeNs t = SecondsToNs(t_s);
+    while (next_pose < rec.poses.size() && rec.poses[next_pose].t_ns <= t) {
+      const TimeNs tp = rec.poses[next_pose].t_ns;
+      for (; next_control < rec.controls.size(); ++next_control) {
+        const TimeNs tc = rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(next_control)));
+        if (tc > tp) break;
+        const auto& v = rec.controls.ValuesAt(static_cast<int>(next_control));
+        tier->AddControl(tc, std::span<const double>(v.data(), 2));
+      }
+      tier->AddPose(tp, rec.poses[next_pose].z);
+      if (auto r = tier->OnPose(tp)) results.emplace_back(NsToSeconds(tp), std::move(*r));
+      ++next_pose;
+    }
+  }
+};
+
+BatchTierOptions Lossless(bool auto_effects) {
+  BatchTierOptions o;
+  o.lossless = true;
+  o.auto_effects = auto_effects;
+  o.first_s = 30.0;
+  o.every_s = 40.0;
+  return o;
+}
+
+TEST(BatchTier, StartsOnScheduleAndAppliesAtFixedDataTimes) {
+  BatchTier tier(Lossless(true), "unicycle", {}, {{"k_v", 1.0}, {"k_omega", 1.0}}, 2);
+  Fed fed(testing::UnicycleRecording(120.0, {"time_offset"}, {{"delay_s", 0.2}}, 6));
+  fed.Until(&tier, 29.9);
+  EXPECT_FALSE(tier.running());  // the run spans less than first_s
+  fed.Until(&tier, 30.1);
+  ASSERT_TRUE(tier.running());
+  EXPECT_EQ(tier.started(), 1);
+  fed.Until(&tier, 34.9);
+  EXPECT_TRUE(fed.results.empty());  // lossless: not before apply_after_s of data
+  fed.Until(&tier, 35.1);
+  ASSERT_EQ(fed.results.size(), 1u);
+  const BatchCalibration& first = fed.results[0].second;
+  ASSERT_TRUE(first.ok) << first.error;
+  EXPECT_EQ(first.sequence, 1);
+  EXPECT_EQ(first.accepted, std::vector<std::string>{"time_offset"}) << first.evidence;
+  EXPECT_NEAR(NsToSeconds(first.data_end_ns), 30.0, 0.06);  // the data up to its start
+  EXPECT_NEAR(fed.results[0].first, 35.0, 0.06);
+  fed.Until(&tier, 69.9);
+  EXPECT_EQ(tier.started(), 1);  // every_s after the first start
+  fed.Until(&tier, 70.1);
+  EXPECT_EQ(tier.started(), 2);
+  fed.Until(&tier, 120.0);
+  EXPECT_EQ(fed.results.size(), 3u);  // started at 30, 70 and 110 s
+  // At shutdown: one over everything.
+  const auto last = tier.Finish(SecondsToNs(120.0));
+  ASSERT_EQ(last.size(), 1u);
+  EXPECT_EQ(last[0].sequence, 4);
+  EXPECT_EQ(last[0].num_poses, static_cast<int>(fed.rec.poses.size()));
+  // The last batch is kincal analyze on the same data, with the same start.
+  AnalyzeOptions o;
+  o.model = "unicycle";
+  o.init = {{"k_v", 1.0}, {"k_omega", 1.0}};
+  const AnalyzeResult offline = Analyze(fed.rec, o);
+  ASSERT_TRUE(last[0].ok) << last[0].error;
+  ASSERT_EQ(last[0].params.size(), offline.after.params.size());
+  for (size_t i = 0; i < offline.after.params.size(); ++i) {
+    EXPECT_NEAR(last[0].params[i].value, offline.after.params[i].value,
+                0.05 * offline.after.params[i].sigma)
+        << offline.after.params[i].name;
+  }
+}
+
+TEST(BatchTier, WithoutAutoTheDeclaredModelIsFittedAndNothingAccepted) {
+  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2);
+  Fed fed(testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 7));
+  fed.Until(&tier, 60.0);
+  ASSERT_EQ(fed.results.size(), 1u);
+  EXPECT_TRUE(fed.results[0].second.ok) << fed.results[0].second.error;
+  EXPECT_TRUE(fed.results[0].second.accepted.empty());
+  EXPECT_EQ(fed.results[0].second.params.size(), 2u);
+}
+
+TEST(BatchTier, DisabledDoesNothing) {
+  BatchTierOptions o = Lossless(false);
+  o.enabled = false;
+  BatchTier tier(o, "unicycle", {}, {}, 2);
+  Fed fed(testing::UnicycleRecording(60.0, {}, {}, 8));
+  fed.Until(&tier, 60.0);
+  EXPECT_TRUE(fed.results.empty());
+  EXPECT_TRUE(tier.Finish(SecondsToNs(60.0)).empty());
+  EXPECT_EQ(tier.store().num_poses(), 0u);
+}
+
+TEST(BatchTier, OptionsAreChecked) {
+  std::string error;
+  BatchTierOptions o;
+  EXPECT_TRUE(o.IsValid(&error));
+  o.every_s = 0.5;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("every_s"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace kincal::daemon
