@@ -159,9 +159,9 @@ int main(int argc, char** argv) {
     const auto est = daemon.Estimate();
     if (!est.names.empty()) {
       if (est.source == "batch") {
-        std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence << " over "
-                  << est.batch_poses << " poses of the run; the filter made " << est.update_count
-                  << " updates):\n";
+        std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence
+                  << " over " << est.batch_poses << " poses of the run; the filter made "
+                  << est.update_count << " updates):\n";
       } else {
         std::cout << "final estimate: the filter's, no batch calibration yet (" << est.update_count
                   << " updates, " << est.filter << "):\n";

@@ -16,9 +16,8 @@ bool BatchTierOptions::IsValid(std::string* error) const {
   return store.IsValid(error);
 }
 
-BatchTier::BatchTier(BatchTierOptions options, std::string model,
-                     std::vector<std::string> declared, std::map<std::string, double> guess,
-                     int num_controls)
+BatchTier::BatchTier(BatchTierOptions options, std::string model, std::vector<std::string> declared,
+                     std::map<std::string, double> guess, int num_controls)
     : opt_(options),
       model_(std::move(model)),
       declared_(std::move(declared)),

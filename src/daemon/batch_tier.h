@@ -33,10 +33,10 @@ struct AddedEffect {
 
 struct BatchTierOptions {
   bool enabled = true;
-  bool auto_effects = false;  // robot.effects: auto
-  bool lossless = false;      // a replay with --fast: results applied at fixed data times
-  double every_s = 60.0;      // data time between batches
-  double first_s = 30.0;      // the first batch once the run spans this much
+  bool auto_effects = false;   // robot.effects: auto
+  bool lossless = false;       // a replay with --fast: results applied at fixed data times
+  double every_s = 60.0;       // data time between batches
+  double first_s = 30.0;       // the first batch once the run spans this much
   double apply_after_s = 5.0;  // lossless: results applied this long after the start
   int threads = 1;             // Analyze's threads (the result does not depend on them)
   int max_effects = 4;         // effects the selection may accept

@@ -24,12 +24,12 @@ namespace kincal::daemon {
 struct BatchCalibration {
   int sequence = 0;  // 1, 2, ... in the order batches were started
   bool ok = false;
-  std::string error;                     // why it failed (too little data, no unique fit)
-  std::vector<std::string> effects;      // the model's: declared, then accepted
-  std::vector<std::string> accepted;     // accepted by the selection beyond the declared
+  std::string error;                           // why it failed (too little data, no unique fit)
+  std::vector<std::string> effects;            // the model's: declared, then accepted
+  std::vector<std::string> accepted;           // accepted by the selection beyond the declared
   std::vector<std::string> accepted_evidence;  // one line each
-  std::vector<ParamEstimate> params;     // the model's, then the effects' (System order)
-  Eigen::MatrixXd covariance;            // cluster-robust, params' order
+  std::vector<ParamEstimate> params;           // the model's, then the effects' (System order)
+  Eigen::MatrixXd covariance;                  // cluster-robust, params' order
   double horizon_s = 0;
   double heldout_before_m = 0, heldout_after_m = 0;      // position RMS at the horizon
   double heldout_before_rad = 0, heldout_after_rad = 0;  // heading RMS at the horizon

@@ -47,9 +47,7 @@ size_t CalibrationStore::AllocatedBytes() const {
 
 int64_t CalibrationStore::Block(TimeNs t) const { return (t - origin_ns_) / block_ns_; }
 
-bool CalibrationStore::Kept(int64_t block) const {
-  return block % (int64_t{1} << level_) == 0;
-}
+bool CalibrationStore::Kept(int64_t block) const { return block % (int64_t{1} << level_) == 0; }
 
 void CalibrationStore::NewBase() {
   if (started_) rebase_ = true;

@@ -76,8 +76,8 @@ struct Daemon::Impl {
 
   std::mutex status_mu;  // guards what follows
   std::string source_error, model_check_evidence;
-  std::string checkpoint_error;  // the last checkpoint write's failure (empty: written)
-  Checkpoint estimate;           // the filter's, until there is a batch calibration
+  std::string checkpoint_error;           // the last checkpoint write's failure (empty: written)
+  Checkpoint estimate;                    // the filter's, until there is a batch calibration
   std::optional<Checkpoint> calibration;  // the batch tier's calibration in force
 
   std::optional<Checkpoint> resume;

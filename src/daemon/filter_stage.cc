@@ -1,15 +1,14 @@
 #include "daemon/filter_stage.h"
 
-#include <spdlog/spdlog.h>
-
 #include <fmt/ranges.h>
+#include <spdlog/spdlog.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <kincal/model_check_t.hpp>
 #include <limits>
 #include <map>
-#include <kincal/model_check_t.hpp>
 
 #include "daemon/messages.h"
 #include "kincal/check.h"
@@ -562,8 +561,8 @@ double FilterStage::DisagreementSigmas(std::string* worst) const {
 
 void FilterStage::PublishCalibration(const BatchCalibration& r, TimeNs t) {
   const BatchCalibration* good = calibration_ ? &*calibration_ : nullptr;
-  FillCalibrationMessage(r, good, std::string(sys_->model().name()),
-                         batch_.store().poses_thinned(), &calibration_msg_);
+  FillCalibrationMessage(r, good, std::string(sys_->model().name()), batch_.store().poses_thinned(),
+                         &calibration_msg_);
   if (good != nullptr) {
     kincal::params_t m;
     FillParamsFromCalibration(*good, std::string(sys_->model().name()), counters_.updates.load(),

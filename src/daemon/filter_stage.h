@@ -25,8 +25,8 @@
 #include <optional>
 #include <string>
 
-#include "daemon/counters.h"
 #include "daemon/batch_tier.h"
+#include "daemon/counters.h"
 #include "daemon/pose_ring.h"
 #include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
@@ -64,9 +64,9 @@ struct FilterStageOptions {
   double model_check_every_s = 1.0;  // a model_check_t this often (the health rate)
   std::string checkpoint_path;       // empty: no checkpoints
   double checkpoint_every_s = 10.0;
-  bool auto_effects = false;  // robot.effects: auto (the batch tier's selection)
+  bool auto_effects = false;     // robot.effects: auto (the batch tier's selection)
   BatchTierOptions calibration;  // the batch tier (batch_tier.h)
-  bool lossless = false;      // a replay with --fast: online decisions at fixed data times
+  bool lossless = false;         // a replay with --fast: online decisions at fixed data times
   bool IsValid(std::string* error) const;
 };
 FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c);
@@ -83,7 +83,7 @@ struct FilterOutputs {
   // a checkpoint, null while there is none.
   std::function<void(int64_t utime, const kincal::calibration_t&, const Checkpoint* in_force)>
       calibration;
-  std::function<void()> checkpoint_due;             // every checkpoint.every_s (if a path is set)
+  std::function<void()> checkpoint_due;  // every checkpoint.every_s (if a path is set)
 };
 
 class FilterStage {

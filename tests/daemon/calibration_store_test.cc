@@ -21,8 +21,8 @@ std::array<double, 2> ControlAt(int64_t i) {
 }
 
 // `seconds` of poses at pose_hz and controls at control_hz, from `start` (pipeline ns).
-void Feed(CalibrationStore* store, TimeNs start, double seconds, double pose_hz,
-          double control_hz, ControlSignal* all_controls = nullptr) {
+void Feed(CalibrationStore* store, TimeNs start, double seconds, double pose_hz, double control_hz,
+          ControlSignal* all_controls = nullptr) {
   const auto pose_dt = static_cast<TimeNs>(1e9 / pose_hz);
   const auto control_dt = static_cast<TimeNs>(1e9 / control_hz);
   const TimeNs end = start + SecondsToNs(seconds);

@@ -15,8 +15,8 @@
 #include <set>
 
 #include "daemon/daemon_test_util.h"
-#include "kincal/daemon/daemon.h"
 #include "kincal/analysis/analyze.h"
+#include "kincal/daemon/daemon.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
 
@@ -259,8 +259,8 @@ camera: {rate_hz: 30, jitter_max_s: 0.0, jitter_prob: 0.0, dropout_prob: 0.0}
     c->robot.guess = {{"k_v", 1.0}, {"k_omega", 1.0}};
     c->filter.control_psd = {0.0, 0.0};
   };
-  const Replayed r = SimulateAndReplayScenario("mrclam_auto", scenario, 240, /*auto_effects=*/true,
-                                               2, unicycle);
+  const Replayed r =
+      SimulateAndReplayScenario("mrclam_auto", scenario, 240, /*auto_effects=*/true, 2, unicycle);
   ASSERT_FALSE(r.checks.empty());
   const auto& last = r.checks.back();
   std::set<std::string> added(last.effects_added.begin(), last.effects_added.end());

@@ -44,8 +44,8 @@ struct StageRun {
   std::vector<kincal::model_check_t> checks;
   std::vector<kincal::calibration_t> calibrations;
   DaemonCounters counters;
-  Checkpoint filter_estimate;              // the filter's last
-  std::optional<Checkpoint> calibration;   // the batch calibration in force at the end
+  Checkpoint filter_estimate;             // the filter's last
+  std::optional<Checkpoint> calibration;  // the batch calibration in force at the end
   Checkpoint estimate;  // what kincald would checkpoint: the calibration, else the filter's
   // The last published value of a parameter.
   double Final(const std::string& name) const {

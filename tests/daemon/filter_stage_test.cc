@@ -53,7 +53,8 @@ TEST(FilterStage, GatesAnIsolatedOutlierAndIsNotMovedByIt) {
   };
   const auto filter_sigma = [](const test_util::StageRun& r, const std::string& name) {
     const auto& f = r.filter_estimate;
-    const auto k = static_cast<int>(std::find(f.names.begin(), f.names.end(), name) - f.names.begin());
+    const auto k =
+        static_cast<int>(std::find(f.names.begin(), f.names.end(), name) - f.names.begin());
     return k < static_cast<int>(f.names.size()) ? std::sqrt(f.covariance(k, k)) : std::nan("");
   };
   for (const auto& [name, truth] : sc.truth) {

@@ -185,8 +185,8 @@ struct CalibrationOptions {
   bool enabled = true;
   double every_s = 60.0;
   double first_s = 30.0;
-  int threads = 1;      // the fit's threads (the result does not depend on them)
-  int max_effects = 4;  // robot.effects: auto: effects the selection may accept
+  int threads = 1;             // the fit's threads (the result does not depend on them)
+  int max_effects = 4;         // robot.effects: auto: effects the selection may accept
   int max_poses = 108'000;     // 1 h at 30 Hz
   int max_controls = 432'000;  // 1 h at 120 Hz
   double block_s = 4.0;
