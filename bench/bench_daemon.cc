@@ -192,7 +192,9 @@ void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
     size_t c = 0;
     for (const auto& p : rec.poses) {
       if (p.t_ns > end) break;
-      for (; c < rec.controls.size() && rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(c))) <= p.t_ns; ++c) {
+      for (; c < rec.controls.size() &&
+             rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(c))) <= p.t_ns;
+           ++c) {
         const auto& v = rec.controls.ValuesAt(static_cast<int>(c));
         tier.AddControl(rec.controls.ToNs(rec.controls.TimeAt(static_cast<int>(c))),
                         std::span<const double>(v.data(), 2));
