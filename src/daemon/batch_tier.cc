@@ -2,6 +2,9 @@
 
 #include <spdlog/spdlog.h>
 
+#include <Eigen/Cholesky>
+#include <cmath>
+
 namespace kincal::daemon {
 
 bool BatchTierOptions::IsValid(std::string* error) const {
@@ -14,6 +17,46 @@ bool BatchTierOptions::IsValid(std::string* error) const {
     return false;
   }
   return store.IsValid(error);
+}
+
+BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& resumed,
+                                  std::string* why) {
+  const auto n = static_cast<Eigen::Index>(r.params.size());
+  bool same = resumed.effects == r.effects && resumed.names.size() == r.params.size() &&
+              resumed.covariance.rows() == n && resumed.covariance.cols() == n;
+  for (size_t i = 0; same && i < r.params.size(); ++i) same = resumed.names[i] == r.params[i].name;
+  if (!same) {
+    *why = "the resumed calibration has other parameters or effects";
+    return r;
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> pb(r.covariance), pr(resumed.covariance);
+  if (pb.info() != Eigen::Success || pr.info() != Eigen::Success || !pb.isPositive() ||
+      !pr.isPositive()) {
+    *why = "a covariance is not positive definite";
+    return r;
+  }
+  const Eigen::MatrixXd id = Eigen::MatrixXd::Identity(n, n);
+  const Eigen::MatrixXd info = pb.solve(id) + pr.solve(id);
+  const Eigen::LDLT<Eigen::MatrixXd> fused(info);
+  Eigen::VectorXd xb(n), xr(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    xb[i] = r.params[static_cast<size_t>(i)].value;
+    xr[i] = resumed.values[static_cast<size_t>(i)];
+  }
+  BatchCalibration out = r;
+  out.covariance = fused.solve(id);
+  out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
+  const Eigen::VectorXd x = out.covariance * (pb.solve(xb) + pr.solve(xr));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    out.params[static_cast<size_t>(i)].value = x[i];
+    out.params[static_cast<size_t>(i)].sigma = std::sqrt(out.covariance(i, i));
+  }
+  out.prior = "fused with the resumed calibration (" +
+              (resumed.source == "batch"
+                   ? "batch " + std::to_string(resumed.batch_sequence) + " of an earlier run"
+                   : std::string("an earlier run's filter estimate")) +
+              ")";
+  return out;
 }
 
 BatchTier::BatchTier(BatchTierOptions options, std::string model, std::vector<std::string> declared,

@@ -20,6 +20,7 @@
 
 #include "daemon/batch_worker.h"
 #include "daemon/calibration_store.h"
+#include "kincal/daemon/checkpoint.h"
 #include "kincal/time.h"
 
 namespace kincal::daemon {
@@ -43,6 +44,13 @@ struct BatchTierOptions {
   CalibrationStoreOptions store;
   bool IsValid(std::string* error) const;
 };
+
+// A batch calibration fused with a resumed one (--resume: a calibration of earlier,
+// independent data): information added, x = P (Pb^-1 xb + Pr^-1 xr), P = (Pb^-1 + Pr^-1)^-1.
+// Only when both describe the same model, effects and parameters in the same order;
+// otherwise the batch alone, with *why saying what differs. `r.prior` names what was fused.
+BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& resumed,
+                                  std::string* why);
 
 class BatchTier {
  public:

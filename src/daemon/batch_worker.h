@@ -38,6 +38,7 @@ struct BatchCalibration {
   bool unique = true;
   std::string warnings;  // one per line
   std::string evidence;  // every trial, "; " between them
+  std::string prior;     // what the parameters were fused with (--resume), empty: nothing
   double compute_s = 0;  // wall time
 };
 

@@ -197,6 +197,7 @@ struct Daemon::Impl {
     }
     FilterStageOptions options = FilterStageOptionsFrom(cfg);
     options.lossless = caps.lossless;
+    options.resumed = resume;
     FilterStage stage(
         sys, std::move(options), std::move(prior),
         [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters);
@@ -414,6 +415,11 @@ int Daemon::Run() {
 Checkpoint Daemon::Estimate() const {
   std::lock_guard lock(impl_->status_mu);
   return impl_->CalibrationLocked();
+}
+
+Checkpoint Daemon::FilterEstimate() const {
+  std::lock_guard lock(impl_->status_mu);
+  return impl_->estimate;
 }
 
 DaemonCounters Daemon::counters() const {

@@ -592,6 +592,13 @@ void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, Tim
     return;
   }
   calibration_ = r;
+  if (opt_.resumed) {
+    std::string why;
+    calibration_ = FusedWithResumed(r, *opt_.resumed, &why);
+    if (calibration_->prior.empty()) {
+      spdlog::info("batch calibration {} is this run's alone: {}", r.sequence, why);
+    }
+  }
   PublishCalibration(r, t);
   spdlog::info(
       "batch calibration {}: {} poses in {:.1f} s; held-out error {:.2f} mm -> {:.2f} mm{}",
@@ -599,7 +606,7 @@ void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, Tim
       r.accepted.empty() ? std::string() : fmt::format(" with {}", fmt::join(r.accepted, ", ")));
   if (!cal_ || !cal_->initialized()) return;
   if (r.effects != effects_) {
-    Rebuild(r, p, t);
+    Rebuild(*calibration_, p, t);
     return;
   }
   std::string worst;
@@ -607,7 +614,7 @@ void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, Tim
   if (z > kRecentreSigmas) {
     spdlog::info("the filter's {} is {:.1f} sigma from batch calibration {}: re-centred on it",
                  worst, z, r.sequence);
-    Recentre(r, p, t);
+    Recentre(*calibration_, p, t);
   }
 }
 

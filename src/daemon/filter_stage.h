@@ -66,7 +66,10 @@ struct FilterStageOptions {
   double checkpoint_every_s = 10.0;
   bool auto_effects = false;     // robot.effects: auto (the batch tier's selection)
   BatchTierOptions calibration;  // the batch tier (batch_tier.h)
-  bool lossless = false;         // a replay with --fast: online decisions at fixed data times
+  // --resume: the checkpoint resumed from. Each batch calibration (of this run's data) is
+  // fused with it when both describe the same parameters (FusedWithResumed).
+  std::optional<Checkpoint> resumed;
+  bool lossless = false;  // a replay with --fast: online decisions at fixed data times
   bool IsValid(std::string* error) const;
 };
 FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c);

@@ -169,6 +169,7 @@ void FillCalibrationMessage(const BatchCalibration& run, const BatchCalibration*
   m->heldout_after_rad = c.heldout_after_rad;
   m->unique = c.unique ? 1 : 0;
   m->warnings = c.warnings;
+  m->prior = c.prior;
 }
 
 kincal::model_check_t ModelCheckMessage(const ModelCheckVerdict& v, const std::string& model,

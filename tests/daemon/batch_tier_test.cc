@@ -108,6 +108,34 @@ TEST(BatchTier, DisabledDoesNothing) {
   EXPECT_EQ(tier.store().num_poses(), 0u);
 }
 
+// --resume: a batch calibration of this run fused with the resumed one of earlier data.
+TEST(BatchTier, FusesWithTheResumedCalibrationByInformation) {
+  BatchCalibration r;
+  r.ok = true;
+  r.effects = {"time_offset"};
+  r.params = {{"k_v", "1", 0.90, 0.02, 0}, {"k_omega", "1", 0.80, 0.01, 0}};
+  r.covariance = Eigen::Vector2d(4e-4, 1e-4).asDiagonal();
+  Checkpoint resumed;
+  resumed.source = "batch";
+  resumed.batch_sequence = 7;
+  resumed.effects = {"time_offset"};
+  resumed.names = {"k_v", "k_omega"};
+  resumed.values = {0.94, 0.80};
+  resumed.covariance = Eigen::Vector2d(4e-4, 3e-4).asDiagonal();
+  std::string why;
+  const BatchCalibration f = FusedWithResumed(r, resumed, &why);
+  EXPECT_NE(f.prior.find("batch 7"), std::string::npos) << f.prior;
+  EXPECT_NEAR(f.params[0].value, 0.92, 1e-12);  // equal weights: the mean
+  EXPECT_NEAR(f.params[0].sigma, std::sqrt(2e-4), 1e-12);
+  EXPECT_NEAR(f.covariance(1, 1), 1.0 / (1.0 / 1e-4 + 1.0 / 3e-4), 1e-15);
+  // Other effects: the batch alone, and why.
+  resumed.effects.clear();
+  const BatchCalibration alone = FusedWithResumed(r, resumed, &why);
+  EXPECT_TRUE(alone.prior.empty());
+  EXPECT_EQ(alone.params[0].value, 0.90);
+  EXPECT_NE(why.find("other parameters or effects"), std::string::npos) << why;
+}
+
 TEST(BatchTier, OptionsAreChecked) {
   std::string error;
   BatchTierOptions o;

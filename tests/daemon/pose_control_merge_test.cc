@@ -49,6 +49,7 @@ StageRun RunMerged(const StageScenario& sc, bool lossless) {
   controls_done.store(true);
   merge.join();
   run.counters = counters.Load();
+  run.estimate = run.calibration ? *run.calibration : run.filter_estimate;
   return run;
 }
 

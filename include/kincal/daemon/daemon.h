@@ -84,8 +84,11 @@ class Daemon {
   // Thread-safe; may be called before Run() returns from any thread.
   void Stop();
 
-  // The current estimate (after Run(): the final one).
+  // The calibration: the last good batch calibration (source "batch"), the filter's
+  // estimate before there is one (after Run(): the final one, as checkpointed).
   Checkpoint Estimate() const;
+  // The filter's own latest estimate (the real-time tier, source "filter").
+  Checkpoint FilterEstimate() const;
   DaemonCounters counters() const;
 
  private:
