@@ -170,10 +170,11 @@ void BM_DaemonLatencyDuringBatch(benchmark::State& state) {
 }
 BENCHMARK(BM_DaemonLatencyDuringBatch)->Unit(benchmark::kMillisecond)->Iterations(1);
 
-// One batch of the daemon's batch tier, with its defaults (one thread, analyze's options),
+// One batch of the daemon's batch tier, with its options (analyze's; threads as given: the
+// daemon's default is one),
 // over the first 10 minutes of a real robot's motion (MR.CLAM dataset 6, motion capture
 // thinned to 10 Hz poses, its odometry commands as the controls): through the store, as
-// kincald runs it at shutdown. Args: robot, robot.effects: auto (1) or nothing (0).
+// kincald runs it at shutdown. Args: robot, robot.effects: auto (1) or nothing (0), threads.
 void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
   const std::string dir = std::string(KINCAL_SOURCE_DIR) + "/../shared/data/mrclam/dataset6";
   if (!std::filesystem::is_directory(dir)) {
@@ -186,6 +187,7 @@ void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
   for (auto _ : state) {
     BatchTierOptions o;
     o.auto_effects = state.range(1) != 0;
+    o.threads = static_cast<int>(state.range(2));
     BatchTier tier(o, "unicycle", {}, {}, 2);
     const TimeNs t0 = rec.poses.front().t_ns, end = t0 + SecondsToNs(600.0);
     TimeNs next_pose = t0;
@@ -215,10 +217,11 @@ void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
   state.counters["heldout_mm_after"] = 1e3 * last.heldout_after_m;
 }
 BENCHMARK(BM_DaemonBatchMrclam10Min)
-    ->Args({1, 0})
-    ->Args({1, 1})
-    ->Args({5, 0})
-    ->Args({5, 1})
+    ->Args({1, 0, 1})
+    ->Args({1, 1, 1})
+    ->Args({5, 0, 1})
+    ->Args({5, 1, 1})
+    ->Args({5, 1, 2})
     ->Unit(benchmark::kSecond)
     ->Iterations(1)
     ->UseRealTime();

@@ -3,7 +3,9 @@
 #include <spdlog/spdlog.h>
 
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
+#include <thread>
 
 namespace kincal::daemon {
 
@@ -12,8 +14,8 @@ bool BatchTierOptions::IsValid(std::string* error) const {
     *error = "calibration.every_s and calibration.first_s must be >= 1 s";
     return false;
   }
-  if (threads < 1 || max_effects < 0) {
-    *error = "calibration.threads must be >= 1";
+  if (threads < 0 || max_effects < 0) {
+    *error = "calibration.threads must be >= 0";
     return false;
   }
   return store.IsValid(error);
@@ -79,7 +81,9 @@ AnalyzeOptions BatchTier::Options() const {
   o.base_effects = declared_;
   o.effects_mode = opt_.auto_effects ? "auto" : "none";
   o.max_effects = opt_.max_effects;
-  o.num_threads = opt_.threads;
+  o.num_threads = opt_.threads > 0
+                      ? opt_.threads
+                      : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   return o;
 }
 

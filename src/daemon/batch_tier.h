@@ -39,8 +39,10 @@ struct BatchTierOptions {
   double every_s = 60.0;       // data time between batches
   double first_s = 30.0;       // the first batch once the run spans this much
   double apply_after_s = 5.0;  // lossless: results applied this long after the start
-  int threads = 1;             // Analyze's threads (the result does not depend on them)
-  int max_effects = 4;         // effects the selection may accept
+  // Analyze's threads, 0: one per core (the result does not depend on them). They run
+  // below the pipeline (batch_worker.h), so the frames keep their priority.
+  int threads = 1;
+  int max_effects = 4;  // effects the selection may accept
   CalibrationStoreOptions store;
   bool IsValid(std::string* error) const;
 };

@@ -1,5 +1,6 @@
 #include "daemon/batch_worker.h"
 
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -56,9 +57,12 @@ BatchCalibration CalibrationFrom(const AnalyzeResult& a, const std::vector<std::
   const auto n = static_cast<Eigen::Index>(c.params.size());
   bool finite = c.covariance.rows() == n && c.covariance.cols() == n && c.covariance.allFinite();
   for (const auto& p : c.params) finite = finite && std::isfinite(p.value) && p.sigma > 0;
-  if (!a.after.unique) {
-    c.error = "the fit is not unique: " + a.after.uniqueness;
-  } else if (!finite) {
+  // A fit analyze calls not unique (several optima, or a model that predicts no better
+  // than a guess ignoring the commands) is still what the data say, as `kincal analyze`
+  // reports it: published, flagged (unique = false, the reason in the warnings), and the
+  // filter does not follow it (filter_stage.cc).
+  if (!a.after.unique) c.warnings += "not unique: " + a.after.uniqueness + "\n";
+  if (!finite) {
     c.error = "the fit gave no usable covariance";
   } else {
     c.ok = true;
@@ -118,9 +122,14 @@ BatchCalibration BatchWorker::Wait() {
 }
 
 void BatchWorker::Loop() {
-  // Below the pipeline's threads (Linux: nice is per thread). Failing to lower one's own
-  // priority changes nothing that matters, so it is not an error.
-  (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNiceIncrement);
+  // Below the pipeline's threads: SCHED_IDLE (runs only on a core nothing else wants), or
+  // nice + kNiceIncrement where that is refused. Linux keeps both per thread, and the fit's
+  // own threads inherit them. Failing to lower one's own priority changes nothing that
+  // matters, so it is not an error.
+  const sched_param idle{};
+  if (sched_setscheduler(0, SCHED_IDLE, &idle) != 0) {
+    (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNiceIncrement);
+  }
   std::unique_lock lock(mu_);
   while (true) {
     cv_.wait(lock, [this] { return stop_ || pending_; });

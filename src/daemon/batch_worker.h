@@ -1,8 +1,8 @@
 // The batch tier's worker thread: `kincal analyze` (the same code, Analyze) on a snapshot
 // of the run, so that neither capture nor the filter thread ever waits for it (except a
 // lossless replay, which waits at a fixed point in data time so that its decisions are
-// bit-identical run to run). The thread runs at a lower priority (nice + kNiceIncrement)
-// than the pipeline: on a loaded machine the batch finishes later, the frames do not.
+// bit-identical run to run). The thread runs below the pipeline (SCHED_IDLE, else nice +
+// kNiceIncrement): on a loaded machine the batch finishes later, the frames do not.
 #pragma once
 
 #include <Eigen/Core>
@@ -42,8 +42,9 @@ struct BatchCalibration {
   double compute_s = 0;  // wall time
 };
 
-// Analyze's result as a batch calibration: fails (ok = false, with why) when the fit is
-// not unique or its covariance is not usable. `declared` are the options' base effects.
+// Analyze's result as a batch calibration: fails (ok = false, with why) when its
+// covariance is not usable; a fit that is not unique is kept, flagged (unique = false, why
+// in the warnings). `declared` are the options' base effects.
 BatchCalibration CalibrationFrom(const AnalyzeResult& a, const std::vector<std::string>& declared);
 
 class BatchWorker {

@@ -392,7 +392,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
   StateMat start_cov = kRestartCovarianceInflation * cal_->params_covariance();
   std::string how = "the running estimate (no re-fit: too few poses)";
   std::string fallback = "the running estimate";
-  if (calibration_ && calibration_->effects == effects_) {
+  if (calibration_ && calibration_->unique && calibration_->effects == effects_) {
     // The whole run's calibration is a better place to restart from than the filter's
     // recent opinion (which is what diverged).
     for (size_t i = 0; i < calibration_->params.size(); ++i) {
@@ -540,7 +540,8 @@ void FilterStage::StartFilterAt(const std::shared_ptr<const System>& sys,
 }
 
 double FilterStage::DisagreementSigmas(std::string* worst) const {
-  if (!calibration_ || !cal_ || !cal_->initialized() || calibration_->effects != effects_) {
+  if (!calibration_ || !calibration_->unique || !cal_ || !cal_->initialized() ||
+      calibration_->effects != effects_) {
     return std::numeric_limits<double>::infinity();
   }
   const VecN<kMaxState> f = cal_->params();
@@ -605,6 +606,10 @@ void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, Tim
       r.sequence, r.num_poses, r.compute_s, 1e3 * r.heldout_before_m, 1e3 * r.heldout_after_m,
       r.accepted.empty() ? std::string() : fmt::format(" with {}", fmt::join(r.accepted, ", ")));
   if (!cal_ || !cal_->initialized()) return;
+  if (!r.unique) {  // published as analyze reports it; the filter does not follow it
+    spdlog::warn("batch calibration {} is not unique: {}", r.sequence, r.warnings);
+    return;
+  }
   if (r.effects != effects_) {
     Rebuild(*calibration_, p, t);
     return;

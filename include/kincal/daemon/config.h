@@ -185,7 +185,9 @@ struct CalibrationOptions {
   bool enabled = true;
   double every_s = 60.0;
   double first_s = 30.0;
-  int threads = 1;             // the fit's threads (the result does not depend on them)
+  // The fit's threads, 0: one per core. One leaves a core to the pipeline on a 2-core
+  // machine; the result does not depend on it.
+  int threads = 1;
   int max_effects = 4;         // robot.effects: auto: effects the selection may accept
   int max_poses = 108'000;     // 1 h at 30 Hz
   int max_controls = 432'000;  // 1 h at 120 Hz
