@@ -88,9 +88,9 @@ AnalyzeOptions BatchTier::Options() const {
 }
 
 void BatchTier::StartBatch(TimeNs t_ns) {
-  const Recording data =
+  Recording data =
       store_.Snapshot(t_ns, "kincald's run (" + std::to_string(store_.num_poses()) + " poses)");
-  if (worker_.Start(sequence_ + 1, data, Options())) {
+  if (worker_.Start(sequence_ + 1, std::move(data), Options())) {
     ++sequence_;
     started_span_ns_ = last_span_ns_ = store_.pose_span_ns();
     next_due_span_ns_ = started_span_ns_ + SecondsToNs(opt_.every_s);
