@@ -230,9 +230,12 @@ std::string CommentText(std::string s) {
 void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source) {
   out << "# kincal calibration of a " << CommentText(c.model) << " robot, from "
       << CommentText(source) << "\n";
-  if (c.source == "batch") {
+  if (c.source == "batch" && c.batch_sequence > 0) {
     out << "# the batch calibration (batch " << c.batch_sequence << ", " << c.batch_poses
         << " poses of the whole run, fitted as kincal analyze fits them); sigma is 1-sigma.\n";
+  } else if (c.source == "batch") {  // from a log's last params_t, which names no batch
+    out << "# the batch calibration (the whole run, fitted as kincal analyze fits it); sigma "
+           "is 1-sigma.\n";
   } else {
     out << "# the filter's estimate (" << c.update_count << " pose updates, filter "
         << CommentText(c.filter) << "); sigma is 1-sigma.\n";
