@@ -68,6 +68,7 @@ BatchTier::BatchTier(BatchTierOptions options, std::string model, std::vector<st
       declared_(std::move(declared)),
       init_(std::move(guess)),
       store_(options.store, num_controls),
+      worker_(/*background=*/!options.lossless),
       next_due_span_ns_(SecondsToNs(options.first_s)) {}
 
 void BatchTier::AddPose(TimeNs t_ns, const Eigen::Vector3d& xytheta) {

@@ -70,7 +70,7 @@ BatchCalibration CalibrationFrom(const AnalyzeResult& a, const std::vector<std::
   return c;
 }
 
-BatchWorker::BatchWorker() : thread_([this] { Loop(); }) {}
+BatchWorker::BatchWorker(bool background) : thread_([this, background] { Loop(background); }) {}
 
 BatchWorker::~BatchWorker() {
   cancel_.store(true);  // a running batch ends at its next stage (Analyze's progress)
@@ -121,13 +121,13 @@ BatchCalibration BatchWorker::Wait() {
   return r;
 }
 
-void BatchWorker::Loop() {
+void BatchWorker::Loop(bool background) {
   // Below the pipeline's threads: SCHED_IDLE (runs only on a core nothing else wants), or
   // nice + kNiceIncrement where that is refused. Linux keeps both per thread, and the fit's
   // own threads inherit them. Failing to lower one's own priority changes nothing that
   // matters, so it is not an error.
   const sched_param idle{};
-  if (sched_setscheduler(0, SCHED_IDLE, &idle) != 0) {
+  if (background && sched_setscheduler(0, SCHED_IDLE, &idle) != 0) {
     (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNiceIncrement);
   }
   std::unique_lock lock(mu_);

@@ -49,7 +49,9 @@ BatchCalibration CalibrationFrom(const AnalyzeResult& a, const std::vector<std::
 
 class BatchWorker {
  public:
-  BatchWorker();
+  // `background`: below the pipeline (live). A lossless replay waits for its batches, so
+  // there the worker keeps the pipeline's priority.
+  explicit BatchWorker(bool background = true);
   ~BatchWorker();
   BatchWorker(const BatchWorker&) = delete;
   BatchWorker& operator=(const BatchWorker&) = delete;
@@ -65,7 +67,7 @@ class BatchWorker {
   static constexpr int kNiceIncrement = 10;
 
  private:
-  void Loop();
+  void Loop(bool background);
   static BatchCalibration Run(const Recording& data, const AnalyzeOptions& options);
 
   std::atomic<bool> cancel_{false};
