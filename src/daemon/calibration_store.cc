@@ -58,7 +58,9 @@ double CalibrationStore::span_s() const {
   return NsToSeconds(std::max({last_pose_ns_, last_control_ns_, origin_ns_}) - origin_ns_);
 }
 
-bool CalibrationStore::AddControl(TimeNs t_ns, std::span<const double> values) {
+// A sample's store time: after a new time base, offset to follow the stored data; the
+// run's first sample fixes the block grid's origin.
+TimeNs CalibrationStore::StoreTime(TimeNs t_ns) {
   if (rebase_) {
     offset_ns_ = std::max(last_pose_ns_, last_control_ns_) + kBaseGapNs - t_ns;
     rebase_ = false;
@@ -67,7 +69,13 @@ bool CalibrationStore::AddControl(TimeNs t_ns, std::span<const double> values) {
   if (!started_) {
     started_ = true;
     origin_ns_ = t;
-  } else if (t < last_control_ns_) {
+  }
+  return t;
+}
+
+bool CalibrationStore::AddControl(TimeNs t_ns, std::span<const double> values) {
+  const TimeNs t = StoreTime(t_ns);
+  if (t < last_control_ns_) {
     return false;
   }
   last_control_ns_ = t;
@@ -88,15 +96,8 @@ bool CalibrationStore::AddControl(TimeNs t_ns, std::span<const double> values) {
 }
 
 bool CalibrationStore::AddPose(TimeNs t_ns, const Eigen::Vector3d& xytheta) {
-  if (rebase_) {
-    offset_ns_ = std::max(last_pose_ns_, last_control_ns_) + kBaseGapNs - t_ns;
-    rebase_ = false;
-  }
-  const TimeNs t = t_ns + offset_ns_;
-  if (!started_) {
-    started_ = true;
-    origin_ns_ = t;
-  } else if (t <= last_pose_ns_) {
+  const TimeNs t = StoreTime(t_ns);
+  if (t <= last_pose_ns_) {
     return false;
   }
   last_pose_ns_ = t;

@@ -71,6 +71,7 @@ class CalibrationStore {
   static constexpr TimeNs kBaseGapNs = 60'000'000'000;
 
  private:
+  TimeNs StoreTime(TimeNs t_ns);
   int64_t Block(TimeNs t) const;
   bool Kept(int64_t block) const;
   void Thin();

@@ -395,15 +395,7 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
   if (calibration_ && calibration_->unique && calibration_->effects == effects_) {
     // The whole run's calibration is a better place to restart from than the filter's
     // recent opinion (which is what diverged).
-    for (size_t i = 0; i < calibration_->params.size(); ++i) {
-      const int a = sys_->ParamIndex(calibration_->params[i].name);
-      start[a] = calibration_->params[i].value;
-      for (size_t k = 0; k < calibration_->params.size(); ++k) {
-        start_cov(a, sys_->ParamIndex(calibration_->params[k].name)) =
-            kRestartCovarianceInflation *
-            calibration_->covariance(static_cast<int>(i), static_cast<int>(k));
-      }
-    }
+    SetFromCalibration(*calibration_, kRestartCovarianceInflation, &start, &start_cov);
     fallback = "batch calibration " + std::to_string(calibration_->sequence);
     how = fallback + " (no re-fit: too few poses)";
   }
@@ -623,18 +615,25 @@ void FilterStage::ApplyBatch(const BatchCalibration& r, const PoseSample& p, Tim
   }
 }
 
+// A batch calibration's values and covariance (times cov_scale) into the running model's
+// parameter mean and covariance, by name (the calibration's model is the filter's).
+void FilterStage::SetFromCalibration(const BatchCalibration& r, double cov_scale,
+                                     VecN<kMaxState>* mean, StateMat* cov) const {
+  for (size_t i = 0; i < r.params.size(); ++i) {
+    const int a = sys_->ParamIndex(r.params[i].name);
+    (*mean)[a] = r.params[i].value;
+    for (size_t k = 0; k < r.params.size(); ++k) {
+      (*cov)(a, sys_->ParamIndex(r.params[k].name)) =
+          cov_scale * r.covariance(static_cast<int>(i), static_cast<int>(k));
+    }
+  }
+}
+
 void FilterStage::Recentre(const BatchCalibration& r, const PoseSample& p, TimeNs t) {
   const int np = sys_->num_params();
   VecN<kMaxState> mean = cal_->params();
   StateMat cov = StateMat::Zero(np, np);
-  for (size_t i = 0; i < r.params.size(); ++i) {
-    const int a = sys_->ParamIndex(r.params[i].name);
-    mean[a] = r.params[i].value;
-    for (size_t k = 0; k < r.params.size(); ++k) {
-      cov(a, sys_->ParamIndex(r.params[k].name)) =
-          r.covariance(static_cast<int>(i), static_cast<int>(k));
-    }
-  }
+  SetFromCalibration(r, 1.0, &mean, &cov);
   StartFilterAt(sys_, mean, cov, p, t);
   counters_.filter_recentres.fetch_add(1);
 }

@@ -141,6 +141,8 @@ class FilterStage {
   void PublishCalibration(const BatchCalibration& r, TimeNs t);
   void Rebuild(const BatchCalibration& r, const PoseSample& p, TimeNs t);
   void Recentre(const BatchCalibration& r, const PoseSample& p, TimeNs t);
+  void SetFromCalibration(const BatchCalibration& r, double cov_scale, VecN<kMaxState>* mean,
+                          StateMat* cov) const;
   // The largest |filter - batch| over their combined sigma, parameter by parameter
   // (infinity when the models differ or there is no batch calibration).
   double DisagreementSigmas(std::string* worst) const;
