@@ -14,6 +14,10 @@ bool BatchTierOptions::IsValid(std::string* error) const {
     *error = "calibration.every_s and calibration.first_s must be >= 1 s";
     return false;
   }
+  if (!(growth >= 0.0)) {
+    *error = "calibration.growth must be >= 0";
+    return false;
+  }
   if (threads < 0 || max_effects < 0) {
     *error = "calibration.threads must be >= 0";
     return false;
@@ -94,7 +98,10 @@ void BatchTier::StartBatch(TimeNs t_ns) {
   if (worker_.Start(sequence_ + 1, std::move(data), Options())) {
     ++sequence_;
     started_span_ns_ = last_span_ns_ = store_.pose_span_ns();
-    next_due_span_ns_ = started_span_ns_ + SecondsToNs(opt_.every_s);
+    // Each batch fits the whole span: spacing them by a fraction of it bounds a long
+    // run's total batch work to a constant times its last batch's.
+    const double gap_s = std::max(opt_.every_s, opt_.growth * NsToSeconds(started_span_ns_));
+    next_due_span_ns_ = started_span_ns_ + SecondsToNs(gap_s);
   }
 }
 

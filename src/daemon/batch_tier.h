@@ -1,10 +1,10 @@
 // kincald's batch tier: the calibration the whole run supports, beside the filter's
 // real-time estimate. The filter stage hands it every control and pose it takes (kept in a
-// bounded CalibrationStore); every `every_s` of data time (the first once the run spans
-// `first_s`) a snapshot of all of it goes to the worker (batch_worker.h), which fits it as
-// `kincal analyze` does: the declared effects as the base, the configured guess as the
-// start and, with robot.effects: auto, analyze's own effect selection on all the data (so
-// an effect a later batch no longer supports is gone again).
+// bounded CalibrationStore); every `every_s` of data time, or `growth` x the span already
+// fitted when that is longer (the first once the run spans `first_s`) a snapshot of all of it goes
+// to the worker (batch_worker.h), which fits it as `kincal analyze` does: the declared effects as
+// the base, the configured guess as the start and, with robot.effects: auto, analyze's own effect
+// selection on all the data (so an effect a later batch no longer supports is gone again).
 //
 // When a result is applied: live, at the first pose after it is ready; in a lossless
 // replay, at the first pose `apply_after_s` of data time after the batch started (the
@@ -38,6 +38,7 @@ struct BatchTierOptions {
   bool lossless = false;       // a replay with --fast: results applied at fixed data times
   double every_s = 60.0;       // data time between batches
   double first_s = 30.0;       // the first batch once the run spans this much
+  double growth = 0.25;        // and at least growth x the span fitted between batches
   double apply_after_s = 5.0;  // lossless: results applied this long after the start
   // Analyze's threads, 0: one per core (the result does not depend on them). They run
   // below the pipeline (batch_worker.h), so the frames keep their priority.

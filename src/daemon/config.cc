@@ -305,6 +305,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
     s.Get("enabled", &c.calibration.enabled);
     s.Get("every_s", &c.calibration.every_s);
     s.Get("first_s", &c.calibration.first_s);
+    s.Get("growth", &c.calibration.growth);
     s.Get("threads", &c.calibration.threads);
     s.Get("max_effects", &c.calibration.max_effects);
     s.Get("max_poses", &c.calibration.max_poses);

@@ -183,6 +183,7 @@ bool CalibrationOptions::IsValid(std::string* error) const {
                 error) &&
          Expect(first_s >= 1 && first_s <= 86400, "calibration.first_s must be in [1, 86400] s",
                 error) &&
+         Expect(growth >= 0 && growth <= 10, "calibration.growth must be in [0, 10]", error) &&
          Expect(threads >= 0 && threads <= 64, "calibration.threads must be 0..64", error) &&
          Expect(max_effects >= 0 && max_effects <= 8, "calibration.max_effects must be 0..8",
                 error) &&

@@ -113,6 +113,7 @@ FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
   o.calibration.enabled = c.calibration.enabled;
   o.calibration.every_s = c.calibration.every_s;
   o.calibration.first_s = c.calibration.first_s;
+  o.calibration.growth = c.calibration.growth;
   o.calibration.threads = c.calibration.threads;
   o.calibration.max_effects = c.calibration.max_effects;
   o.calibration.store.max_poses = c.calibration.max_poses;

@@ -1,7 +1,7 @@
 // BatchTier: when batches start (the first once the run spans first_s, then every every_s
-// of data time) and when their results apply (lossless: at a fixed data time after the
-// start, so that a replay decides the same every time); at shutdown, one more over
-// everything; the fit is analyze's on the same data.
+// of data time, or growth x the span fitted when that is longer) and when their results apply
+// (lossless: at a fixed data time after the start, so that a replay decides the same every time);
+// at shutdown, one more over everything; the fit is analyze's on the same data.
 #include "daemon/batch_tier.h"
 
 #include <gtest/gtest.h>
@@ -85,6 +85,30 @@ TEST(BatchTier, StartsOnScheduleAndAppliesAtFixedDataTimes) {
                 0.05 * offline.after.params[i].sigma)
         << offline.after.params[i].name;
   }
+}
+
+// A long run: each batch refits everything, so once growth x the fitted span exceeds
+// every_s the batches spread out (a --fast replay of hours waits for O(log T) of them,
+// not O(T); the soak test replays 64 h).
+TEST(BatchTier, LongRunsSpaceBatchesByAFractionOfTheirSpan) {
+  BatchTierOptions o = Lossless(false);
+  o.first_s = 10.0;
+  o.every_s = 10.0;
+  o.growth = 0.5;
+  BatchTier tier(o, "unicycle", {}, {}, 2);
+  Fed fed(testing::UnicycleRecording(110.0, {}, {}, 9));
+  // Starts at 10, 20 (max(10, 5)), 30 (max(10, 10)), 45, 67.5 and 101.25 s.
+  const std::vector<std::pair<double, int>> expected = {
+      {9.9, 0},  {10.1, 1}, {19.9, 1}, {20.1, 2},  {29.9, 2},  {30.1, 3}, {44.9, 3},
+      {45.1, 4}, {67.4, 4}, {67.6, 5}, {101.1, 5}, {101.4, 6}, {110.0, 6}};
+  for (const auto& [t_s, started] : expected) {
+    fed.Until(&tier, t_s);
+    EXPECT_EQ(tier.started(), started) << "at " << t_s << " s";
+  }
+  o.growth = -0.1;
+  std::string error;
+  EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_NE(error.find("growth"), std::string::npos) << error;
 }
 
 TEST(BatchTier, WithoutAutoTheDeclaredModelIsFittedAndNothingAccepted) {

@@ -28,6 +28,10 @@ TEST(Config, EachSectionSaysWhatItExpects) {
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_EQ(error, "calibration.every_s must be in [1, 86400] s");
   c = DaemonConfig{};
+  c.calibration.growth = -1;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "calibration.growth must be in [0, 10]");
+  c = DaemonConfig{};
   c.calibration.max_poses = 10;
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_EQ(error, "calibration.max_poses must be 1000..10000000");

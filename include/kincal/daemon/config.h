@@ -185,6 +185,10 @@ struct CalibrationOptions {
   bool enabled = true;
   double every_s = 60.0;
   double first_s = 30.0;
+  // A batch refits everything, so batches are spaced by at least this fraction of the
+  // span already fitted: a run of length T costs O(log T) batches, not O(T) (a --fast
+  // replay of hours waits for each). 0: every every_s regardless.
+  double growth = 0.25;
   // The fit's threads, 0: one per core. One leaves a core to the pipeline on a 2-core
   // machine; the result does not depend on it.
   int threads = 1;
