@@ -23,6 +23,7 @@
 #include "kincal/daemon/frame.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/vision/setup_files.h"
+#include "source_dir.h"
 
 namespace kincal::daemon {
 namespace {
@@ -225,7 +226,7 @@ std::string Kincald() {
 
 // The shipped config, with intrinsics for what vimc delivers and no floor file (nadir).
 std::string VimcDaemonConfig() {
-  const std::string src = std::string(KINCAL_SOURCE_DIR) + "/config";
+  const std::string src = ::kincal::testing::SourceDir() + "/config";
   std::ifstream in(src + "/kincald_libcamera.yaml");
   std::ostringstream out;
   for (std::string line; std::getline(in, line);) {
@@ -353,12 +354,25 @@ std::string Slurp(const std::string& path) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// True once the log kincald records at `path` holds `frames` frames of 636x480 RGB (the
+// recorder flushes every record.flush_every_s), false at the deadline.
+bool WaitForFrames(const std::string& path, int frames, double seconds) {
+  const std::uintmax_t bytes = static_cast<std::uintmax_t>(frames) * 636 * 480 * 3;
+  for (int i = 0; i < static_cast<int>(seconds * 10); ++i) {
+    std::error_code ec;
+    if (fs::file_size(path, ec) >= bytes && !ec) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return false;
+}
+
 TEST(VmVimc, TheDriverIsUnboundAndTheCameraComesBack) {
   RequireVm();
   const char* modules = std::getenv("KINCAL_VM_MODULES");
   ASSERT_NE(modules, nullptr);
   const std::string cfg = VimcDaemonConfig(), ck = Tmp("vimc_ck.json"), log1 = Tmp("run1.txt");
-  auto start = [&](const std::string& log) {
+  // Each run records its frames: a condition to wait for (frames on disk), not a time.
+  auto start = [&](const std::string& log, const std::string& record) {
     const pid_t pid = fork();
     if (pid == 0) {
       const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
@@ -366,19 +380,19 @@ TEST(VmVimc, TheDriverIsUnboundAndTheCameraComesBack) {
       dup2(fd, 2);
       const std::string exe = Kincald();
       execl(exe.c_str(), exe.c_str(), "--config", cfg.c_str(), "--checkpoint", ck.c_str(),
-            "--resume-if-present", static_cast<char*>(nullptr));
+            "--resume-if-present", "--record", record.c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
     return pid;
   };
-  const pid_t first = start(log1);
-  std::this_thread::sleep_for(std::chrono::seconds(4));  // streaming
+  const pid_t first = start(log1, Tmp("run1.lcm"));
+  ASSERT_TRUE(WaitForFrames(Tmp("run1.lcm"), 12, 60)) << Slurp(log1);
   {
     std::ofstream unbind("/sys/bus/platform/drivers/vimc/unbind");
     unbind << "vimc.0";
     ASSERT_TRUE(unbind.good()) << "cannot unbind vimc.0";
   }
-  const int rc = WaitForExit(first, 20);
+  const int rc = WaitForExit(first, 60);
   const std::string out1 = Slurp(log1);
   EXPECT_EQ(rc, 1) << out1;
   EXPECT_NE(out1.find("the camera's device vanished"), std::string::npos) << out1;
@@ -387,10 +401,10 @@ TEST(VmVimc, TheDriverIsUnboundAndTheCameraComesBack) {
   ASSERT_EQ(std::system(insmod.c_str()), 0) << insmod;
   ASSERT_EQ(std::system("udevadm settle --timeout=20"), 0);
   const std::string log2 = Tmp("run2.txt");
-  const pid_t second = start(log2);
-  std::this_thread::sleep_for(std::chrono::seconds(4));
+  const pid_t second = start(log2, Tmp("run2.lcm"));
+  EXPECT_TRUE(WaitForFrames(Tmp("run2.lcm"), 12, 60)) << Slurp(log2);
   kill(second, SIGINT);
-  EXPECT_EQ(WaitForExit(second, 20), 0);
+  EXPECT_EQ(WaitForExit(second, 60), 0);
   const std::string out2 = Slurp(log2);
   int frames = 0;
   const size_t summary = out2.rfind(" frames (");
