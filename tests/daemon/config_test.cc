@@ -9,11 +9,12 @@
 #include <fstream>
 
 #include "daemon/daemon_test_util.h"
+#include "source_dir.h"
 
 namespace kincal::daemon {
 namespace {
 
-const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
+const std::string kConfigDir = ::kincal::testing::SourceDir() + "/config";
 
 std::string WriteConfig(const std::string& name, const std::string& text) {
   const auto dir = std::filesystem::temp_directory_path() / "kincal_config_test";

@@ -13,10 +13,11 @@
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/scenario.h"
+#include "source_dir.h"
 
 namespace kincal::daemon::test_util {
 
-inline const std::string kConfigDir = std::string(KINCAL_SOURCE_DIR) + "/config";
+inline const std::string kConfigDir = ::kincal::testing::SourceDir() + "/config";
 
 // A file in this process's scratch folder.
 inline std::string TempPath(const std::string& name) {

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "daemon/daemon_test_util.h"
+#include "source_dir.h"
 
 namespace kincal::daemon {
 namespace {
@@ -107,7 +108,7 @@ TEST(Frames, BadBuffersAreErrorsNotCrashes) {
   Frame other = p;
   other.format = PixelFormat::kMjpeg;  // PNG bytes labelled MJPG
   EXPECT_THROW(ToGrey(other, &out), FrameError);
-  std::ifstream crash(std::string(KINCAL_SOURCE_DIR) + "/fuzz/corpus/frame/regress-dicom-abort",
+  std::ifstream crash(::kincal::testing::SourceDir() + "/fuzz/corpus/frame/regress-dicom-abort",
                       std::ios::binary);
   ASSERT_TRUE(crash.good());
   const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(crash)), {});

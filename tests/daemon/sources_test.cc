@@ -11,6 +11,7 @@
 #include <kincal/controls_t.hpp>
 
 #include "daemon/daemon_test_util.h"
+#include "source_dir.h"
 
 namespace kincal::daemon {
 namespace {
@@ -18,7 +19,7 @@ namespace {
 using test_util::SimConfig;
 using test_util::TempPath;
 
-const std::string kGoldenLog = std::string(KINCAL_SOURCE_DIR) + "/tests/data/golden_replay.lcm";
+const std::string kGoldenLog = ::kincal::testing::SourceDir() + "/tests/data/golden_replay.lcm";
 
 struct Counted {
   int frames = 0, controls = 0;
@@ -43,7 +44,7 @@ void Drain(FrameSource* s, Counted* c, int max_frames = 1 << 30) {
 
 TEST(Sources, ReplayOfALogIsLosslessAndCarriesItsControls) {
   DaemonConfig c =
-      LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/tests/data/kincald_golden.yaml");
+      LoadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml");
   c.source = SourceKind::kReplay;
   c.replay.path = kGoldenLog;
   c.replay.speed = 0;

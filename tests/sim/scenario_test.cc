@@ -8,10 +8,12 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "source_dir.h"
+
 namespace kincal {
 namespace {
 
-std::string Source(const std::string& rel) { return std::string(KINCAL_SOURCE_DIR) + "/" + rel; }
+std::string Source(const std::string& rel) { return ::kincal::testing::SourceDir() + "/" + rel; }
 
 std::string LoadError(const std::string& path) {
   try {

@@ -7,6 +7,7 @@
 
 #include "kincal/thesis_vision.h"
 #include "kincal/vision/setup_files.h"
+#include "source_dir.h"
 
 namespace kincal::test_util {
 
@@ -19,7 +20,7 @@ inline ThesisVision ShippedCamera() {
   v.camera.cy = 239.5;
   v.floor = vision::NadirFloor(2.0);
   v.layout =
-      vision::ReadTargetLayoutYaml(std::string(KINCAL_SOURCE_DIR) + "/config/target_large.yaml");
+      vision::ReadTargetLayoutYaml(::kincal::testing::SourceDir() + "/config/target_large.yaml");
   v.target_height_m = 0.1;
   return v;
 }

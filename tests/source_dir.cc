@@ -1,0 +1,10 @@
+#include "source_dir.h"
+
+namespace kincal::testing {
+
+const std::string& SourceDir() {
+  static const std::string dir = KINCAL_SOURCE_DIR;
+  return dir;
+}
+
+}  // namespace kincal::testing
