@@ -13,10 +13,11 @@
 // `System`, so an effect written once is simulated, filtered and batch-fitted alike.
 //
 // Adding an effect: one file in src/core/effects/ deriving EffectImpl<Self>, overriding
-// the hooks of its stage as templates, declaring its residual signature, and one
-// `KINCAL_REGISTER_EFFECT(Self)` line; then that file's line in CMakeLists.txt's source
-// list, whose order is the registry's (analyze tries candidates in it; the online check
-// names the first effect whose signature fits).
+// the hooks of its stage as templates, declaring its residual signature, and ending with
+// `KINCAL_EFFECT_FACTORY(Self)`; then its lines in the one explicit list,
+// src/core/effects/effect_list.cc, whose order is the registry's (analyze tries candidates
+// in it; the online check names the first effect whose signature fits), and the file in
+// CMakeLists.txt's source list.
 #pragma once
 
 #include <functional>
@@ -186,6 +187,8 @@ class EffectImpl : public Effect {
 };
 
 using EffectRegistry = Registry<Effect>;
+// The effects in the one explicit list, src/core/effects/effect_list.cc.
+void RegisterBuiltins(Registry<Effect>* registry);
 
 // Creates and binds an effect; an error names the effect and says why: the name is
 // unknown, the effect does not apply to the model, or the channels are invalid.
@@ -200,7 +203,7 @@ EffectSpec ParseEffectSpec(std::string_view text);
 
 }  // namespace kincal
 
-// Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_EFFECT(Class)                                                              \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::EffectRegistry::Instance().Register( \
-      std::string(Class().name()), [] { return std::make_unique<Class>(); });
+// Ends an effect's implementation file, after its anonymous namespace, inside namespace
+// kincal: the factory src/core/effects/effect_list.cc registers.
+#define KINCAL_EFFECT_FACTORY(Class) \
+  std::unique_ptr<Effect> New##Class##Effect() { return std::make_unique<Class>(); }

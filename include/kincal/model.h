@@ -7,9 +7,10 @@
 // map plus its metadata. Every model is evaluated for double and for the autodiff Jet
 // (EKF Jacobians, Ceres batch), which `ModelImpl` wires up from one template.
 //
-// Adding a model: one file in src/core/models/ with a class deriving ModelImpl<Self> and a
-// `KINCAL_REGISTER_MODEL(Self)` line, and that file's line in CMakeLists.txt's source list
-// (whose order is the registry's). Nothing else changes.
+// Adding a model: one file in src/core/models/ with a class deriving ModelImpl<Self>,
+// ending with `KINCAL_MODEL_FACTORY(Self)`; its lines in the one explicit list,
+// src/core/models/model_list.cc (whose order is the registry's), and the file in
+// CMakeLists.txt's source list. Nothing else changes.
 #pragma once
 
 #include <functional>
@@ -76,6 +77,8 @@ class ModelImpl : public KinematicModel {
 };
 
 using ModelRegistry = Registry<KinematicModel>;
+// The models in the one explicit list, src/core/models/model_list.cc.
+void RegisterBuiltins(Registry<KinematicModel>* registry);
 
 // Creates a registered model; an unknown name is an error naming the known models.
 Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* out);
@@ -84,7 +87,7 @@ std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);
 
 }  // namespace kincal
 
-// Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_MODEL(Class)                                                              \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::ModelRegistry::Instance().Register( \
-      std::string(Class().name()), [] { return std::make_unique<Class>(); });
+// Ends a model's implementation file, after its anonymous namespace, inside namespace
+// kincal: the factory src/core/models/model_list.cc registers.
+#define KINCAL_MODEL_FACTORY(Class) \
+  std::unique_ptr<KinematicModel> New##Class##Model() { return std::make_unique<Class>(); }

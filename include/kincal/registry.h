@@ -1,5 +1,9 @@
 // Registry<Base>: named factories for the pluggable parts (models, effects, filters).
-// Each implementation file registers itself with one line; nothing else lists them.
+// Each kind has one explicit list (src/core/models/model_list.cc,
+// src/core/effects/effect_list.cc, src/estimation/filter_list.cc) whose order is the
+// registry's order, whatever the build system does: `kincal analyze` tries and reports
+// candidate effects in it, and the online model check names the first effect whose
+// signature fits. The registry fills itself from that list on first use.
 #pragma once
 
 #include <functional>
@@ -17,7 +21,11 @@ class Registry {
   using Factory = std::function<std::unique_ptr<Base>()>;
 
   static Registry& Instance() {
-    static Registry registry;
+    static Registry registry = [] {
+      Registry r;
+      RegisterBuiltins(&r);  // the kind's list, found by argument-dependent lookup
+      return r;
+    }();
     return registry;
   }
   bool Register(std::string name, Factory f) {

@@ -70,7 +70,8 @@ class Ekf final : public Filter {
   uint32_t mask_ = 0;
 };
 
-KINCAL_REGISTER_FILTER(Ekf, "ekf")
-
 }  // namespace
+
+KINCAL_FILTER_FACTORY(Ekf)
+
 }  // namespace kincal

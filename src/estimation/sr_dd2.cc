@@ -142,7 +142,8 @@ class SrDd2 final : public Filter {
   uint32_t mask_ = 0;
 };
 
-KINCAL_REGISTER_FILTER(SrDd2, "dd2")
-
 }  // namespace
+
+KINCAL_FILTER_FACTORY(SrDd2)
+
 }  // namespace kincal

@@ -114,7 +114,8 @@ class Ukf final : public Filter {
   uint32_t mask_ = 0;
 };
 
-KINCAL_REGISTER_FILTER(Ukf, "ukf")
-
 }  // namespace
+
+KINCAL_FILTER_FACTORY(Ukf)
+
 }  // namespace kincal

@@ -5,6 +5,8 @@
 
 #include <stdexcept>
 
+#include "kincal/estimation/filter.h"
+#include "kincal/model.h"
 #include "kincal/system.h"
 
 namespace kincal {
@@ -56,6 +58,21 @@ TEST(Effect, StatusFormNamesTheProblemWithoutThrowing) {
   EXPECT_NE(s.message().find("backlash"), std::string::npos) << s.message();
   EXPECT_TRUE(MakeSystem("ackermann", {"backlash"}, {}, &sys).ok());
   EXPECT_EQ(sys->num_params(), 3 + 1);
+}
+
+// The registries' order is their explicit lists' (src/core/effects/effect_list.cc, ...),
+// not the build's: analyze reports candidates and the model check names signatures in it.
+TEST(Registry, OrderIsTheExplicitLists) {
+  EXPECT_EQ(EffectRegistry::Instance().Names(),
+            (std::vector<std::string>{"time_offset", "actuator_lag", "lever_arm", "yaw_rate_bias",
+                                      "lateral_slip", "asymmetric_gain", "dead_band", "backlash",
+                                      "effective_track", "turn_slowdown"}));
+  EXPECT_EQ(ModelRegistry::Instance().Names(),
+            (std::vector<std::string>{"diffdrive", "unicycle", "ackermann", "tricycle"}));
+  EXPECT_EQ(FilterRegistry::Instance().Names(), (std::vector<std::string>{"dd2", "ekf", "ukf"}));
+  EXPECT_NE(EffectRegistry::Instance().Create("lever_arm"), nullptr);
+  EXPECT_EQ(EffectRegistry::Instance().Create("lever"), nullptr);
+  EXPECT_EQ(FilterRegistry::Instance().Create("ukf")->name(), "ukf");
 }
 
 }  // namespace

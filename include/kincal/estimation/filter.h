@@ -9,7 +9,8 @@
 // Angle components (state or measurement) are differenced with wrapping to (-pi, pi].
 //
 // No heap allocation per step: all vectors and matrices have compile-time maxima.
-// Adding a filter: one file in src/estimation/ and a KINCAL_REGISTER_FILTER line.
+// Adding a filter: one file in src/estimation/ ending with KINCAL_FILTER_FACTORY(Class),
+// and its lines in src/estimation/filter_list.cc.
 #pragma once
 
 #include <functional>
@@ -70,6 +71,8 @@ class Filter {
 };
 
 using FilterRegistry = Registry<Filter>;
+// The filters in the one explicit list, src/estimation/filter_list.cc.
+void RegisterBuiltins(Registry<Filter>* registry);
 
 // Throws std::invalid_argument naming the known filters if `name` is unknown.
 std::unique_ptr<Filter> MakeFilter(std::string_view name);
@@ -81,7 +84,7 @@ void Triangularize(const CompoundMat& A, StateMat* L);
 
 }  // namespace kincal
 
-// Use inside an anonymous namespace in the implementation file.
-#define KINCAL_REGISTER_FILTER(Class, Name)                                                        \
-  [[maybe_unused]] const bool kRegistered_##Class = ::kincal::FilterRegistry::Instance().Register( \
-      Name, [] { return std::make_unique<Class>(); });
+// Ends a filter's implementation file, after its anonymous namespace, inside namespace
+// kincal: the factory src/estimation/filter_list.cc registers under its name.
+#define KINCAL_FILTER_FACTORY(Class) \
+  std::unique_ptr<Filter> New##Class##Filter() { return std::make_unique<Class>(); }

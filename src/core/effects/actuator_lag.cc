@@ -72,7 +72,8 @@ class ActuatorLag final : public EffectImpl<ActuatorLag> {
   bool shared_ = true;
 };
 
-KINCAL_REGISTER_EFFECT(ActuatorLag)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(ActuatorLag)
+
 }  // namespace kincal

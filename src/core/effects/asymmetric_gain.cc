@@ -44,7 +44,8 @@ class AsymmetricGain final : public EffectImpl<AsymmetricGain> {
   std::vector<int> channels_;
 };
 
-KINCAL_REGISTER_EFFECT(AsymmetricGain)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(AsymmetricGain)
+
 }  // namespace kincal

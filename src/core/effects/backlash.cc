@@ -59,7 +59,8 @@ class Backlash final : public EffectImpl<Backlash> {
   int channel_ = -1;
 };
 
-KINCAL_REGISTER_EFFECT(Backlash)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(Backlash)
+
 }  // namespace kincal

@@ -48,7 +48,8 @@ class DeadBand final : public EffectImpl<DeadBand> {
   std::vector<int> channels_;
 };
 
-KINCAL_REGISTER_EFFECT(DeadBand)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(DeadBand)
+
 }  // namespace kincal

@@ -30,7 +30,8 @@ class EffectiveTrack final : public EffectImpl<EffectiveTrack> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(EffectiveTrack)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(EffectiveTrack)
+
 }  // namespace kincal

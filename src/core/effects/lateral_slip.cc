@@ -25,7 +25,8 @@ class LateralSlip final : public EffectImpl<LateralSlip> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(LateralSlip)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(LateralSlip)
+
 }  // namespace kincal

@@ -41,7 +41,8 @@ class LeverArm final : public EffectImpl<LeverArm> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(LeverArm)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(LeverArm)
+
 }  // namespace kincal

@@ -28,7 +28,8 @@ class TimeOffset final : public EffectImpl<TimeOffset> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(TimeOffset)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(TimeOffset)
+
 }  // namespace kincal

@@ -30,7 +30,8 @@ class TurnSlowdown final : public EffectImpl<TurnSlowdown> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(TurnSlowdown)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(TurnSlowdown)
+
 }  // namespace kincal

@@ -30,7 +30,8 @@ class YawRateBias final : public EffectImpl<YawRateBias> {
   }
 };
 
-KINCAL_REGISTER_EFFECT(YawRateBias)
-
 }  // namespace
+
+KINCAL_EFFECT_FACTORY(YawRateBias)
+
 }  // namespace kincal

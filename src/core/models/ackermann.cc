@@ -42,7 +42,8 @@ class Ackermann final : public ModelImpl<Ackermann> {
   }
 };
 
-KINCAL_REGISTER_MODEL(Ackermann)
-
 }  // namespace
+
+KINCAL_MODEL_FACTORY(Ackermann)
+
 }  // namespace kincal

@@ -37,7 +37,8 @@ class DiffDrive final : public ModelImpl<DiffDrive> {
   }
 };
 
-KINCAL_REGISTER_MODEL(DiffDrive)
-
 }  // namespace
+
+KINCAL_MODEL_FACTORY(DiffDrive)
+
 }  // namespace kincal

@@ -45,7 +45,8 @@ class Tricycle final : public ModelImpl<Tricycle> {
   }
 };
 
-KINCAL_REGISTER_MODEL(Tricycle)
-
 }  // namespace
+
+KINCAL_MODEL_FACTORY(Tricycle)
+
 }  // namespace kincal

@@ -31,7 +31,8 @@ class Unicycle final : public ModelImpl<Unicycle> {
   }
 };
 
-KINCAL_REGISTER_MODEL(Unicycle)
-
 }  // namespace
+
+KINCAL_MODEL_FACTORY(Unicycle)
+
 }  // namespace kincal
