@@ -10,7 +10,7 @@
 #include <sstream>
 #include <thread>
 
-#include "kincal/analysis/option_lists.h"
+#include "kincal/daemon/command_line.h"
 #include "kincal/daemon/daemon.h"
 
 #ifndef KINCAL_INSTALL_DATADIR
@@ -38,48 +38,86 @@ std::string DefaultConfig() {
   return "";
 }
 
+// The options, into `o`; config is the file given (or empty).
+void AddOptions(CLI::App* app, std::string* config, kincal::daemon::CommandLineOptions* o,
+                bool* quiet) {
+  app->add_option("-c,--config", *config,
+                  "YAML config (default: the simulated robot, config/kincald_sim.yaml)");
+  auto* dev =
+      app->add_option("--device", o->device, "V4L2 device, e.g. /dev/video0 (source: v4l2)");
+  auto* lc = app->add_option("--libcamera", o->libcamera,
+                             "libcamera camera id, or 'first' (source: libcamera)");
+  auto* rp = app->add_option("--replay", o->replay,
+                             "replay an LCM log recorded by kincald (source: replay)");
+  dev->excludes(lc)->excludes(rp);
+  lc->excludes(rp);
+  auto* sp = app->add_option("--speed", o->speed, "replay/simulation speed factor (1: real time)");
+  auto* fa =
+      app->add_flag("--fast", o->fast, "as fast as possible, nothing dropped, deterministic");
+  sp->excludes(fa);
+  app->add_option("--loop", o->loops, "replay the log N times, each later by its span (soak tests)")
+      ->check(CLI::PositiveNumber);
+  app->add_option("--record", o->record,
+                  "write everything (frames, controls, outputs) to this LCM log");
+  app->add_flag("--record-png", o->record_png, "store recorded frames as PNG instead of raw");
+  app->add_flag("--publish-frames", o->publish_frames,
+                "also publish frames on LCM (default: log only)");
+  app->add_option("--lcm-url", o->lcm_url,
+                  "LCM provider URL, e.g. udpm://239.255.76.67:7667?ttl=0 or memq://");
+  app->add_option("--resume", o->resume, "start from this checkpoint (JSON)");
+  app->add_option("--checkpoint", o->checkpoint,
+                  "write checkpoints (and the final estimate) to this file");
+  app->add_flag("--resume-if-present", o->resume_if_present,
+                "resume from the --checkpoint file when it exists (services)");
+  app->add_option("--duration", o->duration, "simulation length in seconds (source: sim)");
+  app->add_option("--effects", o->effects,
+                  "robot effects: 'auto' (found and added online), 'none', or specs separated by "
+                  "commas, e.g. time_offset,auto");
+  app->add_flag("-q,--quiet", *quiet, "log warnings and errors only");
+}
+
+// The configuration file (or the built-in defaults without one) with the command line
+// applied, and the daemon made from it.
+kincal::StatusOr<std::unique_ptr<kincal::daemon::Daemon>> MakeDaemon(
+    std::string config, const kincal::daemon::CommandLineOptions& o) {
+  if (config.empty()) config = DefaultConfig();
+  kincal::StatusOr<kincal::daemon::DaemonConfig> cfg =
+      config.empty() ? kincal::daemon::DaemonConfig{} : kincal::daemon::ReadDaemonConfig(config);
+  if (!cfg.ok()) return cfg.status();
+  if (kincal::Status s = kincal::daemon::ApplyCommandLine(o, &*cfg); !s.ok()) return s;
+  return kincal::daemon::Daemon::Create(std::move(cfg).value());
+}
+
+void PrintFinalEstimate(const kincal::daemon::Daemon& daemon) {
+  const auto est = daemon.Estimate();
+  if (!est.names.empty()) {
+    if (est.source == "batch") {
+      std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence << " over "
+                << est.batch_poses << " poses of the run; the filter made " << est.update_count
+                << " updates):\n";
+    } else {
+      std::cout << "final estimate: the filter's, no batch calibration yet (" << est.update_count
+                << " updates, " << est.filter << "):\n";
+    }
+    for (size_t i = 0; i < est.names.size(); ++i) {
+      const auto k = static_cast<Eigen::Index>(i);
+      std::cout << "  " << est.names[i] << " = " << est.values[i] << " +- "
+                << std::sqrt(std::max(0.0, est.covariance(k, k))) << " " << est.units[i] << "\n";
+    }
+  }
+  std::cout << "shutdown: " << daemon.counters().batch_shutdown_ms
+            << " ms in the last batch calibration\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "kincald: online kinematic calibration daemon (capture -> markers -> pose -> SR-DD2 -> LCM)"};
-  std::string config, device, libcamera, replay, record, lcm_url, resume, checkpoint;
-  double speed = 1.0, duration = 0.0;
-  int loops = 1;
-  bool fast = false, record_png = false, publish_frames = false, quiet = false,
-       resume_if_present = false;
-  app.add_option("-c,--config", config,
-                 "YAML config (default: the simulated robot, config/kincald_sim.yaml)");
-  auto* dev = app.add_option("--device", device, "V4L2 device, e.g. /dev/video0 (source: v4l2)");
-  auto* lc = app.add_option("--libcamera", libcamera,
-                            "libcamera camera id, or 'first' (source: libcamera)");
-  auto* rp =
-      app.add_option("--replay", replay, "replay an LCM log recorded by kincald (source: replay)");
-  dev->excludes(lc)->excludes(rp);
-  lc->excludes(rp);
-  auto* sp = app.add_option("--speed", speed, "replay/simulation speed factor (1: real time)");
-  auto* fa = app.add_flag("--fast", fast, "as fast as possible, nothing dropped, deterministic");
-  sp->excludes(fa);
-  app.add_option("--loop", loops, "replay the log N times, each later by its span (soak tests)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--record", record,
-                 "write everything (frames, controls, outputs) to this LCM log");
-  app.add_flag("--record-png", record_png, "store recorded frames as PNG instead of raw");
-  app.add_flag("--publish-frames", publish_frames,
-               "also publish frames on LCM (default: log only)");
-  app.add_option("--lcm-url", lcm_url,
-                 "LCM provider URL, e.g. udpm://239.255.76.67:7667?ttl=0 or memq://");
-  app.add_option("--resume", resume, "start from this checkpoint (JSON)");
-  app.add_option("--checkpoint", checkpoint,
-                 "write checkpoints (and the final estimate) to this file");
-  app.add_flag("--resume-if-present", resume_if_present,
-               "resume from the --checkpoint file when it exists (services)");
-  auto* dur = app.add_option("--duration", duration, "simulation length in seconds (source: sim)");
-  std::string effects;
-  app.add_option("--effects", effects,
-                 "robot effects: 'auto' (found and added online), 'none', or specs separated by "
-                 "commas, e.g. time_offset,auto");
-  app.add_flag("-q,--quiet", quiet, "log warnings and errors only");
+  std::string config;
+  kincal::daemon::CommandLineOptions options;
+  bool quiet = false;
+  AddOptions(&app, &config, &options, &quiet);
   CLI11_PARSE(app, argc, argv);
   if (quiet) spdlog::set_level(spdlog::level::warn);
 
@@ -91,93 +129,22 @@ int main(int argc, char** argv) {
   sigaddset(&signals, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);
 
-  try {
-    if (config.empty()) config = DefaultConfig();
-    kincal::daemon::DaemonConfig cfg =
-        config.empty() ? kincal::daemon::DaemonConfig{} : kincal::daemon::LoadDaemonConfig(config);
-    if (!device.empty()) {
-      cfg.source = kincal::daemon::SourceKind::kV4l2;
-      cfg.v4l2.device = device;
-    } else if (!libcamera.empty()) {
-      cfg.source = kincal::daemon::SourceKind::kLibcamera;
-      cfg.libcamera.camera = libcamera == "first" ? "" : libcamera;
-    } else if (!replay.empty()) {
-      cfg.source = kincal::daemon::SourceKind::kReplay;
-      cfg.replay.path = replay;
-    }
-    if (cfg.source == kincal::daemon::SourceKind::kReplay)
-      cfg.replay.speed = fast ? 0.0 : (sp->count() ? speed : cfg.replay.speed);
-    if (cfg.source == kincal::daemon::SourceKind::kSim)
-      cfg.sim.speed = fast ? 0.0 : (sp->count() ? speed : cfg.sim.speed);
-    if (dur->count()) {
-      if (!(duration > 0 && duration <= kincal::daemon::kMaxSimDurationS)) {
-        throw std::runtime_error(
-            "--duration: expected seconds > 0 and at most " +
-            std::to_string(static_cast<int64_t>(kincal::daemon::kMaxSimDurationS)) + " (30 days)");
-      }
-      cfg.sim.duration_s = duration;
-    }
-    if (!effects.empty()) {
-      cfg.robot.effects.clear();
-      cfg.robot.auto_effects = false;
-      std::vector<std::string> list;
-      if (const kincal::Status s = kincal::ParseEffectList(effects == "none" ? "" : effects, &list);
-          !s.ok()) {
-        throw std::runtime_error(s.message());
-      }
-      for (const std::string& e : list) {
-        if (e == "auto") {
-          cfg.robot.auto_effects = true;
-        } else {
-          cfg.robot.effects.push_back(e);
-        }
-      }
-    }
-    if (loops > 1) cfg.replay.loops = loops;
-    if (!record.empty()) cfg.record.path = record;
-    if (record_png) cfg.record.frame_encoding = kincal::daemon::FrameEncoding::kPng;
-    if (publish_frames) cfg.lcm.publish_frames = true;
-    if (!lcm_url.empty()) cfg.lcm.url = lcm_url;
-    if (!resume.empty()) cfg.checkpoint.resume = resume;
-    if (!checkpoint.empty()) cfg.checkpoint.path = checkpoint;
-    if (resume_if_present && !cfg.checkpoint.path.empty() &&
-        std::filesystem::exists(cfg.checkpoint.path)) {
-      cfg.checkpoint.resume = cfg.checkpoint.path;
-    }
-
-    kincal::daemon::Daemon daemon(std::move(cfg));
-    std::thread signal_thread([&daemon, signals] {
-      int sig = 0;
-      if (sigwait(&signals, &sig) != 0) return;
-      if (sig == 0) return;
-      spdlog::info("kincald: {} received", sig == SIGINT ? "SIGINT" : "SIGTERM");
-      daemon.Stop();
-      if (sigwait(&signals, &sig) == 0 && sig != 0) std::_Exit(128 + sig);
-    });
-    signal_thread.detach();
-    const int rc = daemon.Run();
-    const auto est = daemon.Estimate();
-    if (!est.names.empty()) {
-      if (est.source == "batch") {
-        std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence
-                  << " over " << est.batch_poses << " poses of the run; the filter made "
-                  << est.update_count << " updates):\n";
-      } else {
-        std::cout << "final estimate: the filter's, no batch calibration yet (" << est.update_count
-                  << " updates, " << est.filter << "):\n";
-      }
-      for (size_t i = 0; i < est.names.size(); ++i) {
-        std::cout << "  " << est.names[i] << " = " << est.values[i] << " +- "
-                  << std::sqrt(
-                         std::max(0.0, est.covariance(static_cast<int>(i), static_cast<int>(i))))
-                  << " " << est.units[i] << "\n";
-      }
-    }
-    std::cout << "shutdown: " << daemon.counters().batch_shutdown_ms
-              << " ms in the last batch calibration\n";
-    return rc;
-  } catch (const std::exception& e) {
-    std::cerr << "kincald: error: " << e.what() << "\n";
+  auto made = MakeDaemon(config, options);
+  if (!made.ok()) {
+    std::cerr << "kincald: error: " << made.status().message() << "\n";
     return 1;
   }
+  kincal::daemon::Daemon& daemon = **made;
+  std::thread signal_thread([&daemon, signals] {
+    int sig = 0;
+    if (sigwait(&signals, &sig) != 0) return;
+    if (sig == 0) return;
+    spdlog::info("kincald: {} received", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    daemon.Stop();
+    if (sigwait(&signals, &sig) == 0 && sig != 0) std::_Exit(128 + sig);
+  });
+  signal_thread.detach();
+  const int rc = daemon.Run();
+  PrintFinalEstimate(daemon);
+  return rc;
 }

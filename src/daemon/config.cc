@@ -138,6 +138,14 @@ class Section {
 
 }  // namespace
 
+StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path) {
+  try {
+    return LoadDaemonConfig(path);
+  } catch (const std::exception& e) {
+    return Status::Error(e.what());
+  }
+}
+
 DaemonConfig LoadDaemonConfig(const std::string& path) {
   YAML::Node root;
   try {

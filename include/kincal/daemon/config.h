@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kincal/daemon/frame.h"
+#include "kincal/status.h"
 #include "kincal/vision/markers.h"
 
 namespace kincal::daemon {
@@ -250,6 +251,8 @@ struct DaemonConfig {
 
 // Throws std::runtime_error naming file:line and the offending key.
 DaemonConfig LoadDaemonConfig(const std::string& path);
+// The same as a value or a status with that message (what kincald uses).
+StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path);
 // Throws std::runtime_error("config: " + the IsValid error).
 void Validate(const DaemonConfig& c);
 

@@ -73,6 +73,8 @@ class Daemon {
   // Validates the config and opens everything (LCM, log, source, checkpoint); throws
   // std::runtime_error with a message naming what failed.
   explicit Daemon(DaemonConfig config);
+  // The same as a value or a status with that message (what kincald uses).
+  static StatusOr<std::unique_ptr<Daemon>> Create(DaemonConfig config);
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
