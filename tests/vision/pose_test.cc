@@ -13,7 +13,7 @@
 #include <random>
 
 #include "kincal/angles.h"
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis_vision.h"
 #include "kincal/vision/calibration.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/markers.h"
