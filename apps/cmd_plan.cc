@@ -13,7 +13,7 @@
 #include "kincal/plan/advice.h"
 #include "kincal/plan/plan_output.h"
 #include "kincal/plan/planner.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/setup_files.h"
 #include "python_scripts.h"

@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.h"
-#include "kincal/thesis.h"
+#include "kincal/sim/thesis.h"
 
 namespace kincal::app {
 namespace {

@@ -15,8 +15,8 @@
 
 #include "commands.h"
 #include "kincal/estimation/online_calibrator.h"
-#include "kincal/scenario.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/scenario.h"
+#include "kincal/sim/simulator.h"
 
 namespace kincal::app {
 

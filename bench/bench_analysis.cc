@@ -17,8 +17,8 @@
 #include "kincal/analysis/analyze.h"
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
-#include "kincal/simulator.h"
-#include "kincal/thesis.h"
+#include "kincal/sim/simulator.h"
+#include "kincal/sim/thesis.h"
 
 namespace kincal {
 namespace {

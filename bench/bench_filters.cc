@@ -7,7 +7,7 @@
 
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/model.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 namespace kincal {
 namespace {

@@ -39,7 +39,7 @@
 #include "kincal/io/lcm_guard.h"
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 #include "kincal/system.h"
 #include "kincal/vision/setup_files.h"
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "kincal/estimation/online_calibrator.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 // This file replaces the global allocator with malloc/free on purpose.
 #pragma GCC diagnostic ignored "-Wmismatched-new-delete"

@@ -18,7 +18,7 @@
 #include "daemon/daemon_test_util.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 
 namespace kincal::daemon {
 namespace {

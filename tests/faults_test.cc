@@ -17,7 +17,7 @@
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
 #include "kincal/estimation/online_calibrator.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 
 namespace kincal::daemon {
 namespace {

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "kincal/estimation/batch.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 #include "kincal/system.h"
 
 namespace kincal::testing {

@@ -10,10 +10,10 @@
 
 #include "daemon/bounded_queue.h"
 #include "daemon/counters.h"
+#include "daemon/frame_source.h"
 #include "daemon/publisher.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/frame_source.h"
 
 namespace kincal::daemon {
 

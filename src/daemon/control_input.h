@@ -11,8 +11,8 @@
 #include "daemon/control_clock.h"
 #include "daemon/counters.h"
 #include "daemon/publisher.h"
+#include "daemon/samples.h"
 #include "kincal/daemon/config.h"
-#include "kincal/daemon/samples.h"
 #include "kincal/model.h"
 
 namespace kincal::daemon {

@@ -5,7 +5,7 @@
 #include <atomic>
 #include <cstdint>
 
-#include "kincal/daemon/frame_source.h"
+#include "daemon/frame_source.h"
 
 namespace kincal::daemon {
 

@@ -13,7 +13,7 @@
 #include "daemon/messages.h"
 #include "kincal/check.h"
 #include "kincal/estimation/batch.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 
 namespace kincal::daemon {
 namespace {

@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "daemon/batch_worker.h"
+#include "daemon/samples.h"
 #include "kincal/analysis/model_check.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/samples.h"
 #include "kincal/estimation/filter.h"
 #include "kincal/plan/advice.h"
 #include "kincal/system.h"

@@ -8,7 +8,7 @@
 
 #include "daemon/bounded_queue.h"
 #include "daemon/filter_stage.h"
-#include "kincal/daemon/samples.h"
+#include "daemon/samples.h"
 
 namespace kincal::daemon {
 

@@ -5,7 +5,7 @@
 #include <cstddef>
 #include <vector>
 
-#include "kincal/daemon/samples.h"
+#include "daemon/samples.h"
 
 namespace kincal::daemon {
 

@@ -12,8 +12,8 @@
 #include "daemon/drive_link.h"
 #include "daemon/sources.h"
 #include "kincal/angles.h"
-#include "kincal/scenario.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/scenario.h"
+#include "kincal/sim/simulator.h"
 #include "kincal/vision/target.h"
 
 namespace kincal::daemon {

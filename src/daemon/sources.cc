@@ -5,7 +5,7 @@
 
 #include <stdexcept>
 
-#include "kincal/daemon/samples.h"
+#include "daemon/samples.h"
 #include "kincal/vision/setup_files.h"
 
 namespace kincal::daemon {

@@ -4,8 +4,8 @@
 #include <functional>
 #include <memory>
 
+#include "daemon/frame_source.h"
 #include "kincal/daemon/config.h"
-#include "kincal/daemon/frame_source.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/pose.h"
 #include "kincal/vision/target.h"

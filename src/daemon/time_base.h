@@ -17,7 +17,7 @@
 #include <limits>
 #include <optional>
 
-#include "kincal/daemon/samples.h"
+#include "daemon/samples.h"
 #include "kincal/time.h"
 
 namespace kincal::daemon {

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "kincal/plan/planner.h"
-#include "kincal/thesis.h"
+#include "kincal/sim/thesis.h"
 #include "plan/shaping.h"
 
 namespace kincal {

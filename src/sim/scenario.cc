@@ -1,5 +1,5 @@
 // Simulation scenario files.
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 
 #include <yaml-cpp/yaml.h>
 

@@ -1,4 +1,4 @@
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,4 +1,4 @@
-#include "kincal/thesis.h"
+#include "kincal/sim/thesis.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // The runs of one thesis trial: controls (requested and realised), frame times, start
-// poses and pose measurements, for the idealised and the realistic world (kincal/thesis.h).
+// poses and pose measurements, for the idealised and the realistic world (kincal/sim/thesis.h).
 #pragma once
 
 #include <Eigen/Core>
@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "kincal/estimation/batch.h"
-#include "kincal/thesis.h"
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis.h"
+#include "kincal/sim/thesis_vision.h"
 
 namespace kincal {
 

@@ -1,4 +1,4 @@
-// One reproduction of the thesis experiment: for each trial, the design (kincal/thesis.h),
+// One reproduction of the thesis experiment: for each trial, the design (kincal/sim/thesis.h),
 // the joint and per-experiment calibrations of every estimator, and the bound.
 #include <cmath>
 #include <memory>
@@ -6,7 +6,7 @@
 
 #include "kincal/check.h"
 #include "kincal/estimation/online_calibrator.h"
-#include "kincal/thesis.h"
+#include "kincal/sim/thesis.h"
 #include "sim/lookup_gain.h"
 #include "sim/thesis_design.h"
 

@@ -1,4 +1,4 @@
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis_vision.h"
 
 #include <Eigen/Geometry>
 #include <array>

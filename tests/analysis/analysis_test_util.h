@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "kincal/io/recording.h"
-#include "kincal/scenario.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/scenario.h"
+#include "kincal/sim/simulator.h"
 
 namespace kincal::testing {
 

@@ -12,7 +12,7 @@
 #include <random>
 
 #include "analysis/analysis_test_util.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 #include "test_util.h"
 
 namespace kincal {

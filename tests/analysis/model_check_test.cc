@@ -11,7 +11,7 @@
 
 #include "daemon/messages.h"
 #include "kincal/estimation/online_calibrator.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 namespace kincal {
 namespace {

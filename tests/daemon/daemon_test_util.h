@@ -12,7 +12,7 @@
 
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 #include "source_dir.h"
 
 namespace kincal::daemon::test_util {

@@ -15,8 +15,8 @@
 
 #include "daemon/filter_stage.h"
 #include "kincal/io/recording.h"
-#include "kincal/scenario.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/scenario.h"
+#include "kincal/sim/simulator.h"
 #include "test_util.h"
 
 namespace kincal::daemon::test_util {

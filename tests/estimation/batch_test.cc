@@ -9,8 +9,8 @@
 #include <random>
 
 #include "kincal/angles.h"
-#include "kincal/simulator.h"
-#include "kincal/thesis.h"
+#include "kincal/sim/simulator.h"
+#include "kincal/sim/thesis.h"
 #include "test_util.h"
 
 namespace kincal {

@@ -5,7 +5,7 @@
 #include <spdlog/spdlog.h>
 
 #include "kincal/estimation/batch.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 #include "kincal/system.h"
 
 namespace kincal {

@@ -9,7 +9,7 @@
 #include <random>
 
 #include "kincal/estimation/batch.h"
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 namespace kincal {
 namespace {

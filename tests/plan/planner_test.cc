@@ -12,8 +12,8 @@
 
 #include "kincal/angles.h"
 #include "kincal/estimation/batch.h"
-#include "kincal/simulator.h"
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/simulator.h"
+#include "kincal/sim/thesis_vision.h"
 #include "sim/shipped_camera.h"
 
 namespace kincal {

@@ -6,7 +6,7 @@
 
 #include <random>
 
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis_vision.h"
 
 namespace kincal {
 namespace {

@@ -1,6 +1,6 @@
 // Scenario files: the shipped examples load into the typed struct; a bad key or value is
 // named with file and line; parameters by name over the model's defaults.
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 
 #include <gtest/gtest.h>
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis_vision.h"
 #include "kincal/vision/setup_files.h"
 #include "source_dir.h"
 

@@ -1,6 +1,6 @@
 // Simulator: frame timing statistics, command profiles, and truth integrated by the
 // System; measurements scatter with the configured covariance.
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The thesis experiment reproduced: joint calibration over the 99 runs reaches the
 // target NNDE and the Bayesian Cramer-Rao bound, for every estimator.
-#include "kincal/thesis.h"
+#include "kincal/sim/thesis.h"
 
 #include <gtest/gtest.h>
 

@@ -1,5 +1,5 @@
 // The thesis's camera (Table 6-3) and poses measured through its pixels.
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/thesis_vision.h"
 
 #include <gtest/gtest.h>
 

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "kincal/simulator.h"
+#include "kincal/sim/simulator.h"
 #include "kincal/system.h"
 
 namespace kincal {

@@ -9,7 +9,7 @@
 //
 // Realistic (ThesisOptions::Realistic, issue 18): poses measured through pixels (the
 // Table 6-3 camera, tilted and distorted, the target rendered, detected and solved with
-// the fully projective Lowe pose: kincal/thesis_vision.h) at the thesis's centroid
+// the fully projective Lowe pose: kincal/sim/thesis_vision.h) at the thesis's centroid
 // variance of 0.02 px^2; the wheels turn at the rate a look-up table gives (a gain error
 // per wheel and speed band, 0.1 rad/s commands, saturation); frames stamped on a timer
 // tick; 128 frames per run as in the thesis's example (§6.2.4); the true robot drawn
@@ -23,8 +23,8 @@
 #include <string>
 #include <vector>
 
-#include "kincal/simulator.h"
-#include "kincal/thesis_vision.h"
+#include "kincal/sim/simulator.h"
+#include "kincal/sim/thesis_vision.h"
 
 namespace kincal {
 
