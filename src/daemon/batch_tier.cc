@@ -124,8 +124,14 @@ std::optional<BatchCalibration> BatchTier::OnPose(TimeNs t_ns) {
       r = worker_.Poll();
     }
     if (r) started_span_ns_ = -1;
+    if (r && r->cancelled) {
+      last_span_ns_ = -1;  // not fitted after all: Finish fits everything
+      r.reset();
+    }
   }
-  if (!running() && store_.pose_span_ns() >= next_due_span_ns_) StartBatch(t_ns);
+  if (!running() && !stopping_.load() && store_.pose_span_ns() >= next_due_span_ns_) {
+    StartBatch(t_ns);
+  }
   if (r) return Finished(std::move(*r));
   return std::nullopt;
 }
@@ -134,8 +140,13 @@ std::vector<BatchCalibration> BatchTier::Finish(TimeNs t_ns) {
   std::vector<BatchCalibration> out;
   if (!opt_.enabled || !store_.has_pose()) return out;
   if (running()) {
-    out.push_back(Finished(worker_.Wait()));
+    BatchCalibration r = worker_.Wait();
     started_span_ns_ = -1;
+    if (r.cancelled) {
+      last_span_ns_ = -1;  // stopped early (kincald stopping): the batch below replaces it
+    } else {
+      out.push_back(Finished(std::move(r)));
+    }
   }
   if (store_.pose_span_ns() == last_span_ns_) return out;  // the last batch saw it all
   spdlog::info("batch calibration over the whole run ({} poses, {:.0f} s)", store_.num_poses(),

@@ -12,6 +12,7 @@
 // Data time here is the store's: the newest pose's time since the run's first sample.
 #pragma once
 
+#include <atomic>
 #include <map>
 #include <optional>
 #include <span>
@@ -74,6 +75,12 @@ class BatchTier {
   std::optional<BatchCalibration> OnPose(TimeNs t_ns);
   // At shutdown: the running batch (if any), then one over everything stored, waited for.
   std::vector<BatchCalibration> Finish(TimeNs t_ns);
+  // Thread-safe: a stop was asked for; the running batch (if any) ends early and is
+  // dropped, Finish's batch over everything takes its place.
+  void CancelRunning() {
+    stopping_.store(true);
+    worker_.CancelRunning();
+  }
 
   bool running() const { return started_span_ns_ >= 0; }
   int started() const { return sequence_; }
@@ -94,8 +101,9 @@ class BatchTier {
   CalibrationStore store_;
   BatchWorker worker_;
   int sequence_ = 0;
-  TimeNs started_span_ns_ = -1;  // the running batch's start (store span), -1: none
-  TimeNs last_span_ns_ = -1;     // the last batch's start (store span)
+  TimeNs started_span_ns_ = -1;        // the running batch's start (store span), -1: none
+  TimeNs last_span_ns_ = -1;           // the last batch's start (store span)
+  std::atomic<bool> stopping_{false};  // CancelRunning: no new batch before Finish
   TimeNs next_due_span_ns_;
 };
 

@@ -87,6 +87,7 @@ bool BatchWorker::Start(int sequence, Recording data, AnalyzeOptions options) {
     std::lock_guard lock(mu_);
     if (busy_ || pending_) return false;
     sequence_ = sequence;
+    cancel_running_.store(false);
     data_ = std::move(data);
     options_ = std::move(options);
     result_.reset();
@@ -122,12 +123,13 @@ BatchCalibration BatchWorker::Wait() {
 }
 
 void BatchWorker::Loop(bool background) {
-  // Below the pipeline's threads: SCHED_IDLE (runs only on a core nothing else wants), or
-  // nice + kNiceIncrement where that is refused. Linux keeps both per thread, and the fit's
-  // own threads inherit them. Failing to lower one's own priority changes nothing that
-  // matters, so it is not an error.
-  const sched_param idle{};
-  if (background && sched_setscheduler(0, SCHED_IDLE, &idle) != 0) {
+  // Below the pipeline's threads: nice + kNiceIncrement (about a tenth of a core's share
+  // against a busy pipeline thread). Not SCHED_IDLE: that runs only on a core nothing else
+  // wants, and on a loaded machine (a robot's computer, a CI run of two test programs) the
+  // batch then starved for minutes and the calibration went stale. Linux keeps the nice
+  // value per thread, and the fit's own threads inherit it. Failing to lower one's own
+  // priority changes nothing that matters, so it is not an error.
+  if (background) {
     (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNiceIncrement);
   }
   std::unique_lock lock(mu_);
@@ -140,6 +142,7 @@ void BatchWorker::Loop(bool background) {
     AnalyzeOptions options = options_;
     options.progress = [this](double, const std::string&) {
       if (cancel_.load()) throw Cancelled("cancelled: kincald is being destroyed");
+      if (cancel_running_.load()) throw Cancelled("cancelled: kincald is stopping");
     };
     const int sequence = sequence_;
     lock.unlock();
@@ -160,9 +163,16 @@ void BatchWorker::Loop(bool background) {
   }
 }
 
+void BatchWorker::CancelRunning() { cancel_running_.store(true); }
+
 BatchCalibration BatchWorker::Run(const Recording& data, const AnalyzeOptions& options) {
   try {
     return CalibrationFrom(Analyze(data, options), options.base_effects);
+  } catch (const Cancelled& e) {
+    BatchCalibration r;
+    r.cancelled = true;
+    r.error = e.what();
+    return r;
   } catch (const std::exception& e) {  // too little or unsuitable data; a solver's failure
     BatchCalibration r;
     r.error = e.what();

@@ -1,8 +1,8 @@
 // The batch tier's worker thread: `kincal analyze` (the same code, Analyze) on a snapshot
 // of the run, so that neither capture nor the filter thread ever waits for it (except a
 // lossless replay, which waits at a fixed point in data time so that its decisions are
-// bit-identical run to run). The thread runs below the pipeline (SCHED_IDLE, else nice +
-// kNiceIncrement): on a loaded machine the batch finishes later, the frames do not.
+// bit-identical run to run). The thread runs below the pipeline (nice + kNiceIncrement):
+// on a loaded machine the batch finishes later, the frames do not, and it never starves.
 #pragma once
 
 #include <Eigen/Core>
@@ -24,9 +24,10 @@ namespace kincal::daemon {
 struct BatchCalibration {
   int sequence = 0;  // 1, 2, ... in the order batches were started
   bool ok = false;
-  std::string error;                           // why it failed (too little data, no unique fit)
-  std::vector<std::string> effects;            // the model's: declared, then accepted
-  std::vector<std::string> accepted;           // accepted by the selection beyond the declared
+  bool cancelled = false;             // stopped by CancelRunning (kincald stopping): not a failure
+  std::string error;                  // why it failed (too little data, no unique fit)
+  std::vector<std::string> effects;   // the model's: declared, then accepted
+  std::vector<std::string> accepted;  // accepted by the selection beyond the declared
   std::vector<std::string> accepted_evidence;  // one line each
   std::vector<ParamEstimate> params;           // the model's, then the effects' (System order)
   Eigen::MatrixXd covariance;                  // cluster-robust, params' order
@@ -63,6 +64,10 @@ class BatchWorker {
   std::optional<BatchCalibration> Poll();
   // Waits for the running batch (an empty failed result when none was started).
   BatchCalibration Wait();
+  // Thread-safe: the running batch (if any) ends at Analyze's next stage with a result
+  // marked `cancelled`. The next Start runs normally. (kincald stopping: the last batch
+  // over everything replaces it.)
+  void CancelRunning();
 
   static constexpr int kNiceIncrement = 10;
 
@@ -70,7 +75,7 @@ class BatchWorker {
   void Loop(bool background);
   static BatchCalibration Run(const Recording& data, const AnalyzeOptions& options);
 
-  std::atomic<bool> cancel_{false};
+  std::atomic<bool> cancel_{false}, cancel_running_{false};
   mutable std::mutex mu_;
   std::condition_variable cv_;
   bool stop_ = false, pending_ = false, busy_ = false;

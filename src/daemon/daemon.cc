@@ -28,7 +28,7 @@
 #include "daemon/pose_stage.h"
 #include "daemon/publisher.h"
 #include "daemon/sources.h"
-#include "kincal/scenario.h"
+#include "kincal/sim/scenario.h"
 #include "kincal/system.h"
 
 namespace kincal::daemon {
@@ -63,6 +63,10 @@ struct Daemon::Impl {
   std::atomic<bool> source_done{false};
   std::atomic<bool> controls_done{false};
   std::atomic<bool> filter_done{false};
+  // The filter thread's stage while it runs, so that a stop can end a running batch early
+  // (FilterStage::CancelBatch; the last batch over everything replaces it).
+  std::mutex stage_mu;
+  FilterStage* stage = nullptr;
   CounterSet counters;
   ControlReceiver intake;
   std::unique_ptr<CaptureStage> capture;
@@ -209,7 +213,16 @@ struct Daemon::Impl {
     in.lossless = caps.lossless;
     in.max_control_delay_ns = SecondsToNs(cfg.robot.max_control_delay_s);
     in.max_pending_poses = static_cast<size_t>(std::max(4 * cfg.queues.poses, kMinPendingPoses));
+    {
+      std::lock_guard lock(stage_mu);
+      this->stage = &stage;
+    }
+    if (stop.load()) stage.CancelBatch();
     RunPoseControlMerge(&stage, in);
+    {
+      std::lock_guard lock(stage_mu);
+      this->stage = nullptr;
+    }
     filter_done.store(true);
   }
 
@@ -342,6 +355,14 @@ Daemon::Daemon(DaemonConfig config) {
 
 Daemon::~Daemon() = default;
 
+StatusOr<std::unique_ptr<Daemon>> Daemon::Create(DaemonConfig config) {
+  try {
+    return std::make_unique<Daemon>(std::move(config));
+  } catch (const std::exception& e) {
+    return Status::Error(e.what());
+  }
+}
+
 void Daemon::Stop() { impl_->stop.store(true); }
 
 int Daemon::Run() {
@@ -388,6 +409,10 @@ int Daemon::Run() {
       stopping = true;
       spdlog::info("kincald: stopping: draining queues");
       d.source->Stop();
+      {
+        std::lock_guard lock(d.stage_mu);
+        if (d.stage != nullptr) d.stage->CancelBatch();
+      }
       d.controls_done.store(true);
     }
     if (Clock::now() >= next_health) {

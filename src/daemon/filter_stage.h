@@ -28,12 +28,12 @@
 #include "daemon/batch_tier.h"
 #include "daemon/counters.h"
 #include "daemon/pose_ring.h"
+#include "daemon/samples.h"
 #include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
 #include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
-#include "kincal/daemon/samples.h"
 #include "kincal/estimation/batch.h"
 #include "kincal/estimation/noise_adaptation.h"
 #include "kincal/estimation/online_calibrator.h"
@@ -107,6 +107,8 @@ class FilterStage {
   void TakeControlJump(TimeNs now_mono_ns);
   // Publishes the final estimate (and writes the checkpoint) if the filter has started.
   void Finish();
+  // Thread-safe: kincald is stopping; a running batch ends early (Finish fits everything).
+  void CancelBatch() { batch_.CancelRunning(); }
 
   // The controls up to the pose's time are in, or will never come (a jump is held).
   bool ControlsCover(const PoseSample& p) const {

@@ -111,6 +111,25 @@ TEST(BatchTier, LongRunsSpaceBatchesByAFractionOfTheirSpan) {
   EXPECT_NE(error.find("growth"), std::string::npos) << error;
 }
 
+// A stop (kincald's SIGTERM): the running batch is cut short, no new one starts while the
+// queues drain, and Finish fits everything.
+TEST(BatchTier, AStopStartsNoNewBatchAndFinishFitsEverything) {
+  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2);
+  Fed fed(testing::UnicycleRecording(120.0, {}, {}, 10));
+  fed.Until(&tier, 30.1);
+  ASSERT_EQ(tier.started(), 1);
+  tier.CancelRunning();
+  fed.Until(&tier, 120.0);
+  EXPECT_EQ(tier.started(), 1) << "no batch after the stop";
+  EXPECT_LE(fed.results.size(), 1u);  // the first, unless it ended before the cancel
+  const auto last = tier.Finish(SecondsToNs(120.0));
+  ASSERT_FALSE(last.empty());
+  EXPECT_TRUE(last.back().ok) << last.back().error;
+  EXPECT_FALSE(last.back().cancelled);
+  EXPECT_EQ(last.back().num_poses, static_cast<int>(fed.rec.poses.size()));
+  EXPECT_EQ(tier.started(), 2);
+}
+
 TEST(BatchTier, WithoutAutoTheDeclaredModelIsFittedAndNothingAccepted) {
   BatchTier tier(Lossless(false), "unicycle", {}, {}, 2);
   Fed fed(testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 7));

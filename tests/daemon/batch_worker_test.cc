@@ -22,7 +22,7 @@ AnalyzeOptions AutoOptions() {
 }
 
 TEST(BatchWorker, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
-  BatchWorker worker;
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   const Recording rec = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
   ASSERT_TRUE(worker.Start(7, rec, AutoOptions()));
   EXPECT_FALSE(worker.Start(8, rec, AutoOptions()));  // one at a time
@@ -52,7 +52,7 @@ TEST(BatchWorker, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
 }
 
 TEST(BatchWorker, CleanDataAcceptsNothing) {
-  BatchWorker worker;
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
   const BatchCalibration r = worker.Wait();
   ASSERT_TRUE(r.ok) << r.error;
@@ -62,7 +62,7 @@ TEST(BatchWorker, CleanDataAcceptsNothing) {
 }
 
 TEST(BatchWorker, TooLittleDataIsAnErrorNotACrash) {
-  BatchWorker worker;
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(1.0, {}, {}, 5), AutoOptions()));
   const BatchCalibration r = worker.Wait();
   EXPECT_FALSE(r.ok);
@@ -75,7 +75,7 @@ TEST(BatchWorker, AFitThatExplainsNothingIsFlagged) {
   Recording rec = testing::UnicycleRecording(60.0, {}, {}, 6);
   std::srand(6);  // Eigen's Random()
   for (auto& p : rec.poses) p.z = rec.poses.front().z + 1e-3 * Eigen::Vector3d::Random();
-  BatchWorker worker;
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   AnalyzeOptions o = AutoOptions();
   o.effects_mode = "none";
   ASSERT_TRUE(worker.Start(1, rec, o));
@@ -85,8 +85,26 @@ TEST(BatchWorker, AFitThatExplainsNothingIsFlagged) {
   EXPECT_NE(r.warnings.find("explains nothing"), std::string::npos) << r.warnings;
 }
 
+// kincald stopping: the running batch ends early, marked cancelled (not a failure); the
+// next one runs in full.
+TEST(BatchWorker, ARunningBatchCanBeCancelledAndTheNextRunsInFull) {
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
+  const Recording slow = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
+  ASSERT_TRUE(worker.Start(1, slow, AutoOptions()));  // a selection of ~20 s in full
+  worker.CancelRunning();
+  const BatchCalibration r = worker.Wait();
+  EXPECT_TRUE(r.cancelled);
+  EXPECT_FALSE(r.ok);
+  EXPECT_NE(r.error.find("stopping"), std::string::npos) << r.error;
+  ASSERT_TRUE(worker.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
+  const BatchCalibration next = worker.Wait();
+  EXPECT_FALSE(next.cancelled);
+  ASSERT_TRUE(next.ok) << next.error;
+  EXPECT_EQ(next.sequence, 2);
+}
+
 TEST(BatchWorker, WaitWithoutABatchSaysSo) {
-  BatchWorker worker;
+  BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   const BatchCalibration r = worker.Wait();
   EXPECT_FALSE(r.ok);
   EXPECT_FALSE(r.error.empty());
