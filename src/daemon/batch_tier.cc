@@ -117,8 +117,10 @@ std::optional<BatchCalibration> BatchTier::OnPose(TimeNs t_ns) {
   std::optional<BatchCalibration> r;
   if (running()) {
     if (opt_.lossless) {
-      if (store_.pose_span_ns() >= started_span_ns_ + SecondsToNs(opt_.apply_after_s)) {
-        r = worker_.Wait();
+      // Stopping: the queues drain without waiting; Finish waits for this batch.
+      if (!stopping_.load() &&
+          store_.pose_span_ns() >= started_span_ns_ + SecondsToNs(opt_.apply_after_s)) {
+        r = worker_.WaitUnlessCancelled();
       }
     } else {
       r = worker_.Poll();

@@ -75,8 +75,9 @@ class BatchTier {
   std::optional<BatchCalibration> OnPose(TimeNs t_ns);
   // At shutdown: the running batch (if any), then one over everything stored, waited for.
   std::vector<BatchCalibration> Finish(TimeNs t_ns);
-  // Thread-safe: a stop was asked for; the running batch (if any) ends early and is
-  // dropped, Finish's batch over everything takes its place.
+  // Thread-safe: a stop was asked for; the running batch (if any) ends early (at Analyze's
+  // next stage) and is dropped, nothing waits for it before Finish (a lossless replay's
+  // drain goes on), and Finish's batch over everything takes its place.
   void CancelRunning() {
     stopping_.store(true);
     worker_.CancelRunning();

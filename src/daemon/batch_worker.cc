@@ -163,7 +163,23 @@ void BatchWorker::Loop(bool background) {
   }
 }
 
-void BatchWorker::CancelRunning() { cancel_running_.store(true); }
+void BatchWorker::CancelRunning() {
+  {
+    std::lock_guard lock(mu_);  // a waiter sees the flag before it sleeps, or is woken
+    cancel_running_.store(true);
+  }
+  cv_.notify_all();
+}
+
+std::optional<BatchCalibration> BatchWorker::WaitUnlessCancelled() {
+  std::unique_lock lock(mu_);
+  cv_.wait(lock, [this] {
+    return result_.has_value() || (!busy_ && !pending_) || cancel_running_.load();
+  });
+  if (!result_ && (busy_ || pending_)) return std::nullopt;  // stopping: still running
+  lock.unlock();
+  return Wait();
+}
 
 BatchCalibration BatchWorker::Run(const Recording& data, const AnalyzeOptions& options) {
   try {

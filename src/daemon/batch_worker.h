@@ -68,6 +68,9 @@ class BatchWorker {
   // marked `cancelled`. The next Start runs normally. (kincald stopping: the last batch
   // over everything replaces it.)
   void CancelRunning();
+  // As Wait, but nothing (the batch still running) once CancelRunning was called: a
+  // pipeline that is stopping does not wait here (kincald's Finish waits instead).
+  std::optional<BatchCalibration> WaitUnlessCancelled();
 
   static constexpr int kNiceIncrement = 10;
 

@@ -6,7 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cstdlib>
+#include <optional>
+#include <thread>
 
 #include "analysis/analysis_test_util.h"
 
@@ -101,6 +104,18 @@ TEST(BatchWorker, ARunningBatchCanBeCancelledAndTheNextRunsInFull) {
   EXPECT_FALSE(next.cancelled);
   ASSERT_TRUE(next.ok) << next.error;
   EXPECT_EQ(next.sequence, 2);
+  // A pipeline blocked waiting (a lossless replay) is released by the cancel at once, the
+  // batch still running until its next stage; Wait then collects it.
+  ASSERT_TRUE(worker.Start(3, slow, AutoOptions()));
+  std::thread stopper([&worker] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    worker.CancelRunning();
+  });
+  std::optional<BatchCalibration> w = worker.WaitUnlessCancelled();
+  stopper.join();
+  if (!w) w = worker.Wait();
+  EXPECT_TRUE(w->cancelled);
+  EXPECT_EQ(w->sequence, 3);
 }
 
 TEST(BatchWorker, WaitWithoutABatchSaysSo) {

@@ -4,11 +4,10 @@
 #include "kincal/daemon/command_line.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
-
-#include <unistd.h>
 
 namespace kincal::daemon {
 namespace {
