@@ -35,7 +35,7 @@ class OutputFile : public ::testing::Test {
 
 TEST_F(OutputFile, WritesTheWholeTextAndLeavesNoTemporary) {
   const std::string out = Path("report.json");
-  std::string text(1 << 20, 'x');  // 1 MB: more than one write() may take
+  std::string text(1 << 20, 'x');    // 1 MB: more than one write() may take
   text.append("\r\nend\0tail", 10);  // CR, LF and a NUL go through as they are
   ASSERT_TRUE(WriteFileAtomically(out, text, "report").ok());
   EXPECT_EQ(Read(out), text);
@@ -68,8 +68,7 @@ TEST_F(OutputFile, AMissingFolderNamesTheFileTheStepAndErrno) {
   const std::string out = Path("no/such/folder/report.json");
   const Status s = WriteFileAtomically(out, "{}", "report");
   ASSERT_FALSE(s.ok());
-  EXPECT_EQ(s.message(),
-            out + ".tmp: cannot create the report: No such file or directory");
+  EXPECT_EQ(s.message(), out + ".tmp: cannot create the report: No such file or directory");
 }
 
 TEST_F(OutputFile, AFolderInTheWayKeepsItAndLeavesNoTemporary) {

@@ -52,7 +52,8 @@ TEST(Threshold, FlatteningLevelsAnUnevenFloor) {
   // the disks on the dark side are lighter than the floor on the bright side.
   cv::Mat img(480, 640, CV_8UC1);
   for (int y = 0; y < img.rows; ++y) {
-    for (int x = 0; x < img.cols; ++x) img.at<uint8_t>(y, x) = static_cast<uint8_t>(90 + x * 140 / 639);
+    for (int x = 0; x < img.cols; ++x)
+      img.at<uint8_t>(y, x) = static_cast<uint8_t>(90 + x * 140 / 639);
   }
   for (int k = 0; k < 4; ++k) {
     const int x = 80 + 160 * k;

@@ -13,9 +13,9 @@ namespace kincal::daemon {
 
 // What was given on the command line; empty / unset: the configuration's value stands.
 struct CommandLineOptions {
-  std::string device;     // --device: source v4l2 on this node
-  std::string libcamera;  // --libcamera: source libcamera, this id or "first"
-  std::string replay;     // --replay: source replay of this log
+  std::string device;              // --device: source v4l2 on this node
+  std::string libcamera;           // --libcamera: source libcamera, this id or "first"
+  std::string replay;              // --replay: source replay of this log
   std::optional<double> speed;     // --speed: replay or simulation speed factor
   bool fast = false;               // --fast: as fast as possible, lossless
   std::optional<double> duration;  // --duration: simulation length, s
