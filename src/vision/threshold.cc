@@ -20,6 +20,20 @@ constexpr double kFlatLevel = 200.0;
 // The marker level of a flattened view: this quantile from the dark (bright) end.
 constexpr double kMarkerFraction = 1e-4;
 
+// The grey-level histogram of every kOtsuStride-th pixel of every kOtsuStride-th row; *n
+// the pixels counted.
+std::array<int64_t, 256> SampledHistogram(const cv::Mat& view, int64_t* n) {
+  std::array<int64_t, 256> hist{};
+  for (int y = 0; y < view.rows; y += kOtsuStride) {
+    const uint8_t* row = view.ptr<uint8_t>(y);
+    for (int x = 0; x < view.cols; x += kOtsuStride) {
+      ++hist[row[x]];
+      ++*n;
+    }
+  }
+  return hist;
+}
+
 }  // namespace
 
 void FlattenBackground(const cv::Mat& view, bool dark_on_light, int tile, cv::Mat* out) {
@@ -62,15 +76,8 @@ void FlattenBackground(const cv::Mat& view, bool dark_on_light, int tile, cv::Ma
 }
 
 int FlatThreshold(const cv::Mat& flat, bool dark_on_light, int min_contrast) {
-  std::array<int64_t, 256> hist{};
   int64_t n = 0;
-  for (int y = 0; y < flat.rows; y += kOtsuStride) {
-    const uint8_t* row = flat.ptr<uint8_t>(y);
-    for (int x = 0; x < flat.cols; x += kOtsuStride) {
-      ++hist[row[x]];
-      ++n;
-    }
-  }
+  const std::array<int64_t, 256> hist = SampledHistogram(flat, &n);
   auto quantile = [&](double q) {
     const auto target = static_cast<int64_t>(q * static_cast<double>(n));
     int64_t c = 0;
@@ -87,15 +94,8 @@ int FlatThreshold(const cv::Mat& flat, bool dark_on_light, int min_contrast) {
 }
 
 int OtsuThreshold(const cv::Mat& view, int min_contrast) {
-  std::array<int64_t, 256> hist{};
   int64_t n = 0;
-  for (int y = 0; y < view.rows; y += kOtsuStride) {
-    const uint8_t* row = view.ptr<uint8_t>(y);
-    for (int x = 0; x < view.cols; x += kOtsuStride) {
-      ++hist[row[x]];
-      ++n;
-    }
-  }
+  const std::array<int64_t, 256> hist = SampledHistogram(view, &n);
   double sum = 0;
   for (int i = 0; i < 256; ++i)
     sum += static_cast<double>(i) * static_cast<double>(hist[static_cast<size_t>(i)]);

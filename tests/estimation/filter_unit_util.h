@@ -1,4 +1,4 @@
-// Small systems with known answers for the filters' unit tests (ekf_test.cc, ukf_test.cc).
+// Small systems with known answers for the filters' unit tests (sr_dd2, ekf, ukf).
 #pragma once
 
 #include <cmath>

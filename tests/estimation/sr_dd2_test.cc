@@ -5,21 +5,13 @@
 #include <cmath>
 #include <random>
 
+#include "estimation/filter_unit_util.h"
 #include "kincal/estimation/filter.h"
 
 namespace kincal {
 namespace {
 
-// x = [r, bearing] -> [r cos b, r sin b]; no process noise.
-class PolarToCartesian final : public ProcessFunction {
- public:
-  int state_dim() const override { return 2; }
-  int noise_dim() const override { return 1; }
-  void Eval(const double* x, const double*, double* out) const override {
-    out[0] = x[0] * std::cos(x[1]);
-    out[1] = x[0] * std::sin(x[1]);
-  }
-};
+using testing::PolarToCartesian;
 
 TEST(Nonlinear, Dd2MatchesMonteCarloBetterThanEkf) {
   const Eigen::Vector2d mean(1.0, M_PI / 2);
