@@ -1,6 +1,7 @@
 #include "kincal/sim/thesis_vision.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <numbers>
@@ -24,6 +25,10 @@ constexpr double kTrialNoiseGrey = 3.0;
 // The centres must scatter as asked to this fraction after the image noise is scaled
 // (sampling error of the scatter: about 4 % with 64 frames of 4 markers).
 constexpr double kCalibrationTolerance = 0.15;
+// Calibration frames: a centre this many robust sigmas off is a misdetection; more than
+// this fraction of such frames means the noise breaks the detection.
+constexpr double kGrossSigmas = 8.0;
+constexpr double kMaxGrossFraction = 0.1;
 
 vision::FloorExtrinsics Table63Floor() {
   // Rows of R_cf are the camera axes in floor coordinates. Looking straight down with image
@@ -129,34 +134,70 @@ PixelPoseMeter::PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& opti
   }
 }
 
-// Scatter (px per axis) of each marker's detected centre about its own mean over frames
-// of a still target at the workspace origin.
+// Scatter (px per axis) of each marker's detected centre about its own median over frames
+// of a still target at the workspace origin. A frame with a centre beyond kGrossSigmas
+// robust sigmas (1.4826 x the median absolute deviation) is a misdetection, not scatter,
+// and is left out; when more than one frame in kMaxGrossFraction^-1 is, the noise breaks
+// the detection, and the scatter of all frames (which jumps) is returned.
 double PixelPoseMeter::CentreScatter(double noise_grey, std::mt19937_64& rng) {
   const Eigen::Vector3d at(0.0, 0.0, 0.3);
   const vision::Pose3 pose = vision::CameraPoseOnFloor(vision_.floor, at, vision_.target_height_m);
   vision::RenderOptions r = RenderOptionsFor(options_, noise_grey);
   const size_t n = vision_.layout.markers.size();
-  int frames = 0;
   vision::MarkerTracker tracker(vision_.camera, vision_.layout, vision::DetectorOptions{});
-  std::vector<std::vector<Eigen::Vector2d>> seen(n);
+  std::vector<std::vector<Eigen::Vector2d>> frames;  // [frame][marker id]
   for (int k = 0; k < options_.calibration_frames; ++k) {
     const auto frame = vision::RenderTarget(vision_.camera, pose, vision_.layout, r, rng);
     const auto markers = tracker.Track(frame.image);
     if (markers.size() != n) continue;
-    for (const auto& m : markers) seen[static_cast<size_t>(m.id)].push_back(m.centre_px);
-    ++frames;
+    std::vector<Eigen::Vector2d> centres(n);
+    for (const auto& m : markers) centres[static_cast<size_t>(m.id)] = m.centre_px;
+    frames.push_back(std::move(centres));
   }
-  if (frames < 4) return 0.0;
+  if (frames.size() < 4) return 0.0;
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  // Each marker's median centre, then every per-axis deviation from it.
+  std::vector<Eigen::Vector2d> centre(n);
+  std::vector<double> abs_dev;
+  for (size_t i = 0; i < n; ++i) {
+    for (int axis = 0; axis < 2; ++axis) {
+      std::vector<double> v;
+      for (const auto& f : frames) v.push_back(f[i][axis]);
+      centre[i][axis] = median(v);
+      for (const double x : v) abs_dev.push_back(std::abs(x - centre[i][axis]));
+    }
+  }
+  const double limit = kGrossSigmas * 1.4826 * median(abs_dev);
+  auto gross = [&](const std::vector<Eigen::Vector2d>& f) {
+    for (size_t i = 0; i < n; ++i) {
+      if ((f[i] - centre[i]).cwiseAbs().maxCoeff() > limit) return true;
+    }
+    return false;
+  };
+  const auto bad = std::count_if(frames.begin(), frames.end(), gross);
+  const bool broken =
+      static_cast<double>(bad) > kMaxGrossFraction * static_cast<double>(frames.size());
   double ss = 0.0;
   int dof = 0;
-  for (const auto& s : seen) {
+  for (size_t i = 0; i < n; ++i) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& c : s) mean += c;
-    mean /= static_cast<double>(s.size());
-    for (const auto& c : s) ss += (c - mean).squaredNorm();
-    dof += 2 * (static_cast<int>(s.size()) - 1);
+    int count = 0;
+    for (const auto& f : frames) {
+      if (broken || !gross(f)) {
+        mean += f[i];
+        ++count;
+      }
+    }
+    mean /= static_cast<double>(count);
+    for (const auto& f : frames) {
+      if (broken || !gross(f)) ss += (f[i] - mean).squaredNorm();
+    }
+    dof += 2 * (count - 1);
   }
-  return std::sqrt(ss / dof);
+  return dof > 0 ? std::sqrt(ss / dof) : 0.0;
 }
 
 bool PixelPoseMeter::Solve(const std::vector<vision::Marker>& markers, vision::PlanarPose* out) {

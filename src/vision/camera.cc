@@ -36,12 +36,14 @@ Eigen::Vector2d CameraModel::PixelToNormalized(const Eigen::Vector2d& px) const 
     const double dradial = k1 + 2.0 * r2 * k2 + 3.0 * r2 * r2 * k3;  // d radial / d r2
     const Eigen::Vector2d f(x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - d.x(),
                             y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - d.y());
-    Eigen::Matrix2d J;
-    J(0, 0) = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
-    J(0, 1) = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
-    J(1, 0) = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
-    J(1, 1) = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
-    const Eigen::Vector2d step = J.partialPivLu().solve(f);
+    // The 2x2 Jacobian (symmetric) solved in closed form: this runs for every pixel the
+    // simulated camera renders.
+    const double a = radial + 2.0 * x * x * dradial + 2.0 * p1 * y + 6.0 * p2 * x;
+    const double b = 2.0 * x * y * dradial + 2.0 * p1 * x + 2.0 * p2 * y;
+    const double c = radial + 2.0 * y * y * dradial + 6.0 * p1 * y + 2.0 * p2 * x;
+    const double det = a * c - b * b;
+    if (!(std::abs(det) > 1e-300)) break;
+    const Eigen::Vector2d step((c * f.x() - b * f.y()) / det, (a * f.y() - b * f.x()) / det);
     n -= step;
     if (step.squaredNorm() < 1e-30) break;
   }

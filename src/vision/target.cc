@@ -38,21 +38,31 @@ bool TargetLayout::IsValid(std::string* error) const {
 
 namespace {
 
-// Blur, vignetting, noise and 8-bit quantisation of a rendered radiance image.
+// Blur, vignetting, noise and 8-bit quantisation of a rendered radiance image. The noise
+// comes from OpenCV's generator (a ziggurat normal, vectorised), seeded from `rng` so that a
+// seed still fixes every frame; drawing 300,000 std::normal_distribution samples a frame
+// made the simulated camera slower than the pipeline it feeds.
 cv::Mat Finish(const CameraModel& cam, cv::Mat img, const RenderOptions& opt,
                std::mt19937_64& rng) {
   if (opt.blur_sigma_px > 0.0) cv::GaussianBlur(img, img, cv::Size(0, 0), opt.blur_sigma_px);
-  std::normal_distribution<double> g(0.0, opt.noise_sigma);
-  const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
-  cv::Mat out8(cam.height, cam.width, CV_8UC1);
-  for (int v = 0; v < cam.height; ++v) {
-    for (int u = 0; u < cam.width; ++u) {
-      const double rr = ((u - cam.cx) * (u - cam.cx) + (v - cam.cy) * (v - cam.cy)) / rmax2;
-      double val = img.at<double>(v, u) * (1.0 - opt.vignetting * rr);
-      if (opt.noise_sigma > 0.0) val += g(rng);
-      out8.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(std::lround(val));
+  if (opt.vignetting != 0.0) {
+    const double rmax2 = 0.25 * (cam.width * cam.width + cam.height * cam.height);
+    for (int v = 0; v < cam.height; ++v) {
+      double* row = img.ptr<double>(v);
+      const double dv2 = (v - cam.cy) * (v - cam.cy);
+      for (int u = 0; u < cam.width; ++u) {
+        row[u] *= 1.0 - opt.vignetting * ((u - cam.cx) * (u - cam.cx) + dv2) / rmax2;
+      }
     }
   }
+  if (opt.noise_sigma > 0.0) {
+    cv::Mat noise(img.size(), CV_64FC1);
+    cv::RNG noise_rng(static_cast<uint64_t>(rng()));
+    noise_rng.fill(noise, cv::RNG::NORMAL, 0.0, opt.noise_sigma);
+    img += noise;
+  }
+  cv::Mat out8;
+  img.convertTo(out8, CV_8UC1);  // rounds to nearest and saturates
   return out8;
 }
 

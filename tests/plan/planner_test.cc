@@ -239,16 +239,22 @@ Eigen::Vector3d MeasuredPoseSigma(PixelPoseMeter& meter, std::mt19937_64& rng) {
   std::vector<Eigen::Vector3d> errors;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   std::uniform_real_distribution<double> pos(-0.5, 0.5), ang(-3.0, 3.0);
-  for (int k = 0; k < kPoses; ++k) {
+  int lost = 0;  // refused by the fit's chi-square (a misdetection): rare, as on the path
+  for (int k = 0; k < kPoses && lost <= kPoses; ++k) {
     Eigen::Vector3d z;
     Eigen::Matrix3d R;
     const Eigen::Vector3d at(pos(rng), pos(rng), ang(rng));
-    EXPECT_TRUE(meter.Measure(at, rng, &z, &R));
+    if (!meter.Measure(at, rng, &z, &R)) {
+      ++lost;
+      --k;
+      continue;
+    }
     Eigen::Vector3d e = z - at;
     e.z() = WrapAngle(e.z());
     errors.push_back(e);
     mean += e / kPoses;
   }
+  EXPECT_LE(lost, kPoses / 100);
   Eigen::Vector3d sq = Eigen::Vector3d::Zero();
   for (const auto& e : errors) sq += (e - mean).cwiseAbs2();
   std::cout << "pose errors across the view: mean " << mean.transpose() << ", scatter "
@@ -268,7 +274,7 @@ void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const 
   po.centroid_sigma_px = 0.05;  // about 12 grey levels of image noise; 0.1 px breaks detection
   // Rendered finely enough that the poses carry no fixed pattern (4x leaves one of about
   // 0.2 mrad of heading that white-noise information cannot know: the tricycle's steering
-  // scale was then 1.5x its predicted sigma; PixelPoseMeter.FinerSupersampling...).
+  // scale was then 1.5x its predicted sigma; PixelPoseMeter.FinerSupersamplingShrinks...).
   po.supersample = 8;
   PixelPoseMeter meter(v, po, rng);
   c.o.info.pose_sigma = MeasuredPoseSigma(meter, rng);
@@ -335,7 +341,7 @@ void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixels) {
   Case c = Reference(10.0);
   c.o.max_abs = {12.0, 12.0};
-  ExpectPredictedSigmaThroughPixels(c, 16, 12, "diffdrive + lag, delay, lever arm");
+  ExpectPredictedSigmaThroughPixels(c, 24, 12, "diffdrive + lag, delay, lever arm");
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForAUnicycle) {
