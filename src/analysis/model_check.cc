@@ -1,6 +1,7 @@
 #include "kincal/analysis/model_check.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 
@@ -108,11 +109,14 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     return v;
   }
   const int n = count_;
-  auto mean = [&](Series k) {
+  // Every series' mean once: the correlations below share them.
+  std::array<double, kNumSeries> means{};
+  for (int k = 0; k < kNumSeries; ++k) {
     double m = 0;
-    for (int i = 0; i < n; ++i) m += data_[k][static_cast<size_t>(i)];
-    return m / n;
-  };
+    for (int i = 0; i < n; ++i) m += data_[static_cast<size_t>(k)][static_cast<size_t>(i)];
+    means[static_cast<size_t>(k)] = m / n;
+  }
+  auto mean = [&](Series k) { return means[static_cast<size_t>(k)]; };
   auto corr_z = [&](Series y, Series x) {
     const double my = mean(y), mx = mean(x);
     double sxy = 0, sxx = 0, syy = 0;

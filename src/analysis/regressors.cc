@@ -128,11 +128,20 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
     }
     return (saa > 0 && sbb > 0) ? sab / std::sqrt(saa * sbb) : 0.0;
   };
+  // The commanded twist is constant between control samples: evaluate it once per sample
+  // (index -1: before the first, zero controls), then walk the sorted grid for each lag.
+  const int m = static_cast<int>(u.size());
+  std::vector<Twist<double>> commanded(static_cast<size_t>(m) + 1);
+  for (int i = -1; i < m; ++i) {
+    commanded[static_cast<size_t>(i + 1)] = bare.model().BodyTwist(p.data(), u.ValuesAt(i).data());
+  }
   double best = -1e300, best_lag = 0.0;
   std::vector<double> vc(vm.size()), wc(vm.size());
   for (double lag = -kMaxLagS; lag <= kMaxLagS + 1e-9; lag += kLagSearchStepS) {
+    int idx = u.IndexAt(tgrid.front() - lag);
     for (size_t k = 0; k < tgrid.size(); ++k) {
-      const auto tw = bare.model().BodyTwist(p.data(), u.At(tgrid[k] - lag).data());
+      while (idx + 1 < m && u.TimeAt(idx + 1) <= tgrid[k] - lag) ++idx;
+      const Twist<double>& tw = commanded[static_cast<size_t>(idx + 1)];
       vc[k] = tw.vx;
       wc[k] = tw.omega;
     }
