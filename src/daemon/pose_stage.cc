@@ -12,6 +12,15 @@ constexpr int kCentreNoiseFrames = 200;
 // ... and never taken below (0.002 px)^2 (a perfect synthetic image).
 constexpr double kMinCentreVariance = 4e-6;
 
+vision::FloorPoseSolverOptions SolverOptions(const PoseOptions& pose) {
+  vision::FloorPoseSolverOptions o;
+  o.method = pose.method == PoseMethod::kGroundPlane ? vision::FloorPoseMethod::kGroundPlane
+                                                     : vision::FloorPoseMethod::kLowe;
+  o.sigma_px = pose.sigma_px;
+  o.max_rms_px = pose.max_rms_px;
+  return o;
+}
+
 }  // namespace
 
 PoseStage::PoseStage(const PoseOptions& pose, const vision::DetectorOptions& detector,
@@ -19,6 +28,7 @@ PoseStage::PoseStage(const PoseOptions& pose, const vision::DetectorOptions& det
     : opt_(pose),
       vis_(v),
       tracker_(v.camera, v.layout, detector),
+      solver_(v.camera, v.floor, v.layout, v.target_height_m, SolverOptions(pose)),
       centre_variance_(pose.sigma_px * pose.sigma_px) {}
 
 bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
@@ -65,44 +75,16 @@ bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
 
 void PoseStage::Solve(const std::vector<vision::Marker>& markers, PoseSample* p) {
   p->valid = false;
-  const int nm = static_cast<int>(markers.size());
-  for (int i = 0; i < nm; ++i) {
-    const auto& m = markers[static_cast<size_t>(i)];
-    if (m.id < 0) return;
-    const auto& q = vis_.layout.markers[static_cast<size_t>(m.id)];
-    obj_[static_cast<size_t>(i)] = Eigen::Vector3d(q.x(), q.y(), 0.0);
-    norm_[static_cast<size_t>(i)] = vis_.camera.PixelToNormalized(m.centre_px);
-  }
-  const std::span<const Eigen::Vector3d> o(obj_.data(), static_cast<size_t>(nm));
-  const std::span<const Eigen::Vector2d> n(norm_.data(), static_cast<size_t>(nm));
-  Eigen::Vector3d init = last_pose_;
-  vision::Pose3 pose3;
-  if (!have_last_ || opt_.method == PoseMethod::kLowe) {
-    if (!vision::PlanarInitialPose(o, n, &pose3)) return;
-    init = vision::FloorPoseOf(vis_.floor, pose3);
-  }
-  if (opt_.method == PoseMethod::kGroundPlane) {
-    const auto r = vision::GroundPlanePose(vis_.floor, vis_.target_height_m, o, n, init,
-                                           vis_.camera.fx, opt_.sigma_px);
-    if (!r.ok || !(r.rms_px <= opt_.max_rms_px) || !r.xytheta.allFinite()) return;
-    p->xytheta = r.xytheta;
-    p->covariance = r.covariance;
-    p->rms_px = r.rms_px;
-  } else {
-    const auto lowe = vision::LevelLowePose(vis_.floor, o, n, pose3, vis_.camera.fx, opt_.sigma_px);
-    if (!lowe.ok || !(lowe.rms_px <= opt_.max_rms_px)) return;
-    const vision::PlanarPose r =
-        vision::FloorPoseFromLoweAtHeight(vis_.floor, lowe, vis_.target_height_m);
-    if (!r.ok) return;
-    p->xytheta = r.xytheta;
-    p->covariance = r.covariance;
-    p->rms_px = r.rms_px;
-  }
+  vision::PlanarPose r;
+  if (!solver_.Solve(markers, have_last_ ? &last_pose_ : nullptr, &r)) return;
+  p->xytheta = r.xytheta;
+  p->covariance = r.covariance;
+  p->rms_px = r.rms_px;
   p->xytheta.z() = WrapAngle(p->xytheta.z());
   p->valid = true;
   last_pose_ = p->xytheta;
   have_last_ = true;
-  CalibrateCovariance(nm, p);
+  CalibrateCovariance(static_cast<int>(markers.size()), p);
 }
 
 // The residual variance of a solve, RSS / (residuals - unknowns), is an unbiased sample

@@ -12,6 +12,7 @@
 #include "daemon/sources.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/vision/floor_pose_solver.h"
 #include "kincal/vision/markers.h"
 
 namespace kincal::daemon {
@@ -32,8 +33,7 @@ class PoseStage {
   const VisionSetup& vis_;
   vision::MarkerTracker tracker_;
   cv::Mat grey_;
-  std::array<Eigen::Vector3d, kMaxMarkers> obj_;
-  std::array<Eigen::Vector2d, kMaxMarkers> norm_;
+  vision::FloorPoseSolver solver_;
   Eigen::Vector3d last_pose_ = Eigen::Vector3d::Zero();
   bool have_last_ = false;
   // The marker centres' noise as the poses' own residuals show it (px^2, running mean):

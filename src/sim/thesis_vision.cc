@@ -7,6 +7,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "kincal/vision/floor_pose_solver.h"
+
 namespace kincal {
 namespace {
 
@@ -201,31 +203,17 @@ double PixelPoseMeter::CentreScatter(double noise_grey, std::mt19937_64& rng) {
 }
 
 bool PixelPoseMeter::Solve(const std::vector<vision::Marker>& markers, vision::PlanarPose* out) {
-  std::array<Eigen::Vector3d, 8> obj;
-  std::array<Eigen::Vector2d, 8> norm;
-  const size_t n = std::min<size_t>(markers.size(), obj.size());
-  for (size_t i = 0; i < n; ++i) {
-    const auto& q = vision_.layout.markers[static_cast<size_t>(markers[i].id)];
-    obj[i] = Eigen::Vector3d(q.x(), q.y(), 0.0);
-    norm[i] = vision_.camera.PixelToNormalized(markers[i].centre_px);
-  }
-  const std::span<const Eigen::Vector3d> o(obj.data(), n);
-  const std::span<const Eigen::Vector2d> u(norm.data(), n);
-  vision::Pose3 init;
-  if (!vision::PlanarInitialPose(o, u, &init)) return false;
-  const vision::LoweResult lowe = vision::LevelLowePose(
-      vision_.floor, o, u, init, vision_.camera.fx, options_.centroid_sigma_px);
-  // A solve whose centres do not fit (a marker taken for another, a blob of noise) is
-  // refused: residual sum of squares beyond the 99.9 % point of its chi-square.
-  const double dof = 2.0 * static_cast<double>(n) - 6.0;
-  const double rss = lowe.rms_px * lowe.rms_px * static_cast<double>(n);
-  const double sigma2 = options_.centroid_sigma_px * options_.centroid_sigma_px;
-  if (!lowe.ok || (dof > 0.0 && rss > kMaxFitChi2 * sigma2)) return false;
   // On the floor through the plate's known height, not its solved depth: the depth of
   // four close markers seen from 1.7 m is biased at this noise (a scale of every
-  // position, 2e-4 of all lengths in the joint estimate; docs/thesis.md).
-  *out = vision::FloorPoseFromLoweAtHeight(vision_.floor, lowe, vision_.target_height_m);
-  return out->ok && out->xytheta.allFinite();
+  // position, 2e-4 of all lengths in the joint estimate; docs/thesis.md). A solve whose
+  // centres do not fit is refused at the 99.9 % point of its chi-square.
+  vision::FloorPoseSolverOptions o;
+  o.method = vision::FloorPoseMethod::kLowe;
+  o.sigma_px = options_.centroid_sigma_px;
+  o.max_chi2 = kMaxFitChi2;
+  vision::FloorPoseSolver solver(vision_.camera, vision_.floor, vision_.layout,
+                                 vision_.target_height_m, o);
+  return solver.Solve(markers, nullptr, out);
 }
 
 bool PixelPoseMeter::Measure(const Eigen::Vector3d& pose, std::mt19937_64& rng, Eigen::Vector3d* z,
