@@ -12,7 +12,7 @@
 
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/ros2_control.h"
@@ -21,7 +21,7 @@ namespace kincal::app {
 namespace {
 
 // The last plausible kincal.params_t on `channel`.
-daemon::Checkpoint FromLog(const std::string& path, const std::string& channel) {
+Checkpoint FromLog(const std::string& path, const std::string& channel) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) throw std::runtime_error(path + ": cannot open");
   LcmLogReader file(path);
@@ -47,8 +47,8 @@ daemon::Checkpoint FromLog(const std::string& path, const std::string& channel) 
     std::cerr << "kincal export: " << bad << " undecodable events on " << channel << " skipped\n";
   }
   for (const auto& p : file.problems()) std::cerr << "kincal export: " << p << "\n";
-  daemon::Checkpoint c;
-  daemon::FillCheckpoint(last, {}, &c);
+  Checkpoint c;
+  FillCheckpoint(last, {}, &c);
   return c;
 }
 
@@ -71,10 +71,16 @@ std::map<std::string, double> ParseNominal(const std::string& text) {
 
 }  // namespace
 
-daemon::Checkpoint ReadReportAsCheckpoint(const std::string& path) {
+Checkpoint ReadCheckpointOrThrow(const std::string& path) {
+  StatusOr<Checkpoint> c = ReadCheckpoint(path);
+  if (!c.ok()) throw std::runtime_error(c.status().message());
+  return std::move(c).value();
+}
+
+Checkpoint ReadReportAsCheckpoint(const std::string& path) {
   ReportEstimate r;
   if (Status s = ReadReportEstimate(path, &r); !s.ok()) throw std::runtime_error(s.message());
-  daemon::Checkpoint c;
+  Checkpoint c;
   c.model = r.model;
   c.effects = r.effects;
   c.filter = "batch (kincal analyze)";
@@ -111,10 +117,10 @@ Command AddExport(CLI::App& app) {
                  "ros2_control: the controller's name (default: its type's)");
   app.add_option("--out", a->out, "YAML file (default: standard output)");
   return [a]() -> int {
-    daemon::Checkpoint c;
+    Checkpoint c;
     std::string source;
     if (!a->checkpoint.empty()) {
-      c = daemon::ReadCheckpoint(a->checkpoint);
+      c = ReadCheckpointOrThrow(a->checkpoint);
       source = a->checkpoint;
     } else if (!a->log.empty()) {
       c = FromLog(a->log, a->channel);
@@ -134,7 +140,7 @@ Command AddExport(CLI::App& app) {
         throw std::runtime_error(s.message());
       }
     } else {
-      daemon::WriteExportYaml(out, c, source);
+      WriteExportYaml(out, c, source);
     }
     if (a->out.empty()) {
       std::cout << out.str();

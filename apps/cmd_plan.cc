@@ -9,7 +9,7 @@
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
 #include "kincal/analysis/option_lists.h"
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/plan/advice.h"
 #include "kincal/plan/plan_output.h"
 #include "kincal/plan/planner.h"
@@ -68,8 +68,8 @@ void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen
     c->diagonal()[i] = std::pow(sys.params()[static_cast<size_t>(i)].default_sigma, 2);
   if (a.checkpoint.empty() && a.report.empty()) return;
   const std::string& source = a.checkpoint.empty() ? a.report : a.checkpoint;
-  const daemon::Checkpoint ck = a.checkpoint.empty() ? ReadReportAsCheckpoint(a.report)
-                                                     : daemon::ReadCheckpoint(a.checkpoint);
+  const Checkpoint ck =
+      a.checkpoint.empty() ? ReadReportAsCheckpoint(a.report) : ReadCheckpointOrThrow(a.checkpoint);
   const std::vector<std::string>& names = ck.names;
   std::vector<int> at(names.size(), -1);
   for (size_t k = 0; k < names.size(); ++k) {

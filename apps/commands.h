@@ -6,7 +6,7 @@
 #include <functional>
 #include <string>
 
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 
 namespace kincal::app {
 
@@ -22,7 +22,9 @@ void WriteOutput(const std::string& path, const std::string& text, const char* w
 
 // An analyze report.json's final estimate as a checkpoint; its covariance is diagonal (the
 // report keeps only sigma). Throws std::runtime_error naming the file and field.
-daemon::Checkpoint ReadReportAsCheckpoint(const std::string& path);
+Checkpoint ReadReportAsCheckpoint(const std::string& path);
+// ReadCheckpoint's error as the std::runtime_error a command reports and exits 1 on.
+Checkpoint ReadCheckpointOrThrow(const std::string& path);
 
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);

@@ -33,9 +33,9 @@
 #include "daemon/control_input.h"
 #include "daemon/sources.h"
 #include "kincal/analysis/option_lists.h"
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/io/lcm_guard.h"
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
@@ -143,7 +143,7 @@ void FuzzYaml(const uint8_t* data, size_t size) {
 
 void FuzzCheckpoint(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("checkpoint.json", data, size);
-  Expect([&] { kincal::daemon::ReadCheckpoint(path); });
+  (void)ReadCheckpoint(path);  // a Status, never an exception
 }
 
 void FuzzLists(const uint8_t* data, size_t size) {

@@ -16,8 +16,8 @@
 #include <thread>
 
 #include "daemon/daemon_test_util.h"
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/sim/scenario.h"
 
 namespace kincal::daemon {
@@ -126,7 +126,7 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
     first = d.Estimate();
   }
   ASSERT_TRUE(std::filesystem::exists(c.checkpoint.path));
-  const Checkpoint saved = ReadCheckpoint(c.checkpoint.path);
+  const Checkpoint saved = ReadCheckpoint(c.checkpoint.path).value();
   EXPECT_EQ(saved.values, first.values);
   // A second session starting from the checkpoint begins where the first ended: its
   // estimate is at least as tight, and closer than the configured (10 % off) guess.

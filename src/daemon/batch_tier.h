@@ -21,7 +21,7 @@
 
 #include "daemon/batch_worker.h"
 #include "daemon/calibration_store.h"
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/time.h"
 
 namespace kincal::daemon {

@@ -321,7 +321,9 @@ Daemon::Daemon(DaemonConfig config) {
   Impl& d = *impl_;
   const DaemonConfig& cfg = d.cfg;
   if (!cfg.checkpoint.resume.empty()) {
-    d.resume = ReadCheckpoint(cfg.checkpoint.resume);
+    StatusOr<Checkpoint> resume = ReadCheckpoint(cfg.checkpoint.resume);
+    if (!resume.ok()) throw std::runtime_error(resume.status().message());
+    d.resume = std::move(resume).value();
     if (d.resume->model != d.sys.model().name()) {
       throw std::runtime_error(cfg.checkpoint.resume + ": checkpoint is for model '" +
                                d.resume->model + "', the config says '" +

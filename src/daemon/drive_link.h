@@ -19,8 +19,8 @@
 #include <optional>
 
 #include "kincal/control_signal.h"
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/plan/workspace.h"
 #include "kincal/status.h"
 

@@ -31,12 +31,12 @@
 #include "daemon/samples.h"
 #include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
 #include "kincal/estimation/batch.h"
 #include "kincal/estimation/noise_adaptation.h"
 #include "kincal/estimation/online_calibrator.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/system.h"
 
 namespace kincal {

@@ -12,8 +12,8 @@
 #include <optional>
 #include <thread>
 
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/plan/advice.h"
 
 namespace kincal::daemon {

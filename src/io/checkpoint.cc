@@ -1,5 +1,5 @@
 // Checkpoint files (JSON) and the YAML export.
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -21,7 +21,7 @@
 #include "kincal/io/output_file.h"
 #include "kincal/system.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c) {
@@ -135,9 +135,13 @@ bool CheckpointIsValid(const Checkpoint& c, std::string* error) {
   return true;
 }
 
-Checkpoint ReadCheckpoint(const std::string& path) {
+namespace {
+
+// Throws std::runtime_error naming the path and what is wrong; ReadCheckpoint turns that
+// into its Status.
+Checkpoint ParseCheckpoint(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open checkpoint");
+  if (!in) throw std::runtime_error(path + ": cannot open checkpoint: " + std::strerror(errno));
   nlohmann::json j;
   try {
     j = nlohmann::json::parse(in);
@@ -188,6 +192,16 @@ Checkpoint ReadCheckpoint(const std::string& path) {
     throw std::runtime_error(path + ": " + e.what());
   }
   return c;
+}
+
+}  // namespace
+
+StatusOr<Checkpoint> ReadCheckpoint(const std::string& path) {
+  try {
+    return ParseCheckpoint(path);
+  } catch (const std::exception& e) {
+    return Status::Error(e.what());
+  }
 }
 
 namespace {
@@ -263,4 +277,4 @@ void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& 
   }
 }
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -27,7 +27,7 @@ struct Param {
   double value = 0.0, sigma = 0.0;
 };
 
-bool Find(const daemon::Checkpoint& c, const std::string& name, Param* p) {
+bool Find(const Checkpoint& c, const std::string& name, Param* p) {
   for (size_t i = 0; i < c.names.size(); ++i) {
     if (c.names[i] != name) continue;
     const int k = static_cast<int>(i);
@@ -49,7 +49,7 @@ std::string Sigma(const std::string& what, const Param& p, const std::string& un
   return what + " " + Num(p.value, 7) + " " + unit + ", sigma " + Num(p.sigma, 2) + " " + unit;
 }
 
-Status Need(const daemon::Checkpoint& c, std::initializer_list<const char*> names,
+Status Need(const Checkpoint& c, std::initializer_list<const char*> names,
             std::map<std::string, Param>* out) {
   for (const char* n : names) {
     if (!Find(c, n, &(*out)[n])) {
@@ -77,7 +77,7 @@ void DiffDriveEntries(const Param& rl, const Param& rr, const Param& d, double r
   };
 }
 
-Status MapDiffDrive(const daemon::Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
+Status MapDiffDrive(const Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
   std::map<std::string, Param> p;
   if (Status s = Need(c, {"r_l", "r_r", "d"}, &p); !s.ok()) return s;
   const double radius = NominalOr(o, "wheel_radius", 0.5 * (p["r_l"].value + p["r_r"].value));
@@ -90,7 +90,7 @@ Status MapDiffDrive(const daemon::Checkpoint& c, const Ros2ControlOptions& o, Ma
 // A velocity-commanded robot on a differential drive: realised v = k_v v and
 // omega = k_omega omega mean radii k_v times the configured ones and a track
 // k_v / k_omega times the configured one.
-Status MapUnicycle(const daemon::Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
+Status MapUnicycle(const Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
   std::map<std::string, Param> p;
   if (Status s = Need(c, {"k_v", "k_omega"}, &p); !s.ok()) return s;
   if (!o.nominal.count("wheel_radius") || !o.nominal.count("wheel_separation")) {
@@ -111,7 +111,7 @@ Status MapUnicycle(const daemon::Checkpoint& c, const Ros2ControlOptions& o, Map
   return Status();
 }
 
-Status MapAckermann(const daemon::Checkpoint& c, const Ros2ControlOptions&, Mapped* m) {
+Status MapAckermann(const Checkpoint& c, const Ros2ControlOptions&, Mapped* m) {
   std::map<std::string, Param> p;
   if (Status s = Need(c, {"r_b", "l", "steer_offset"}, &p); !s.ok()) return s;
   m->controller = "ackermann_steering_controller";
@@ -127,7 +127,7 @@ Status MapAckermann(const daemon::Checkpoint& c, const Ros2ControlOptions&, Mapp
   return Status();
 }
 
-Status MapTricycle(const daemon::Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
+Status MapTricycle(const Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
   std::map<std::string, Param> p;
   if (Status s = Need(c, {"k_drive", "wheelbase", "k_steer", "steer_offset"}, &p); !s.ok()) {
     return s;
@@ -174,8 +174,8 @@ bool Ros2ControlOptions::IsValid(std::string* error) const {
   return true;
 }
 
-Status WriteRos2ControlYaml(std::ostream& out, const daemon::Checkpoint& c,
-                            const std::string& source, const Ros2ControlOptions& options) {
+Status WriteRos2ControlYaml(std::ostream& out, const Checkpoint& c, const std::string& source,
+                            const Ros2ControlOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) return Status::Error(why);
   Mapped m;

@@ -10,8 +10,8 @@
 #include <map>
 #include <string>
 
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/sim/scenario.h"
 #include "source_dir.h"
 

@@ -10,8 +10,8 @@
 namespace kincal {
 namespace {
 
-daemon::Checkpoint Estimate(const std::string& model, const std::map<std::string, double>& v) {
-  daemon::Checkpoint c;
+Checkpoint Estimate(const std::string& model, const std::map<std::string, double>& v) {
+  Checkpoint c;
   c.model = model;
   for (const auto& [name, value] : v) {
     c.names.push_back(name);

@@ -14,8 +14,8 @@
 #include <memory>
 #include <string>
 
-#include "kincal/daemon/checkpoint.h"
 #include "kincal/daemon/config.h"
+#include "kincal/io/checkpoint.h"
 
 namespace kincal::daemon {
 

@@ -13,10 +13,8 @@
 #include "kincal/status.h"
 
 namespace kincal {
-class params_t;  // generated from lcm/params_t.lcm
-}
 
-namespace kincal::daemon {
+class params_t;  // generated from lcm/params_t.lcm
 
 struct Checkpoint {
   std::string model;
@@ -55,9 +53,9 @@ bool CheckpointIsValid(const Checkpoint& c, std::string* error);
 // a non-finite estimate is not written.
 Status WriteCheckpoint(const std::string& path, const Checkpoint& c);
 
-// Throws std::runtime_error naming the path and what is wrong (CheckpointIsValid too).
-Checkpoint ReadCheckpoint(const std::string& path);
+// An error names the path and what is wrong (CheckpointIsValid's message too).
+StatusOr<Checkpoint> ReadCheckpoint(const std::string& path);
 // YAML: model, effects, parameters {name: {value, sigma, unit}}, and the covariance.
 void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& source);
 
-}  // namespace kincal::daemon
+}  // namespace kincal

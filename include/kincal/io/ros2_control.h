@@ -7,7 +7,7 @@
 #include <ostream>
 #include <string>
 
-#include "kincal/daemon/checkpoint.h"
+#include "kincal/io/checkpoint.h"
 #include "kincal/status.h"
 
 namespace kincal {
@@ -27,7 +27,7 @@ struct Ros2ControlOptions {
 // Writes `c` (a checkpoint, a log's last estimate or an analyze report) as the
 // parameters of the controller for c.model, with each value's sigma as a YAML comment.
 // An error names what is missing (a parameter of the model, a nominal value it needs).
-Status WriteRos2ControlYaml(std::ostream& out, const daemon::Checkpoint& c,
-                            const std::string& source, const Ros2ControlOptions& options);
+Status WriteRos2ControlYaml(std::ostream& out, const Checkpoint& c, const std::string& source,
+                            const Ros2ControlOptions& options);
 
 }  // namespace kincal
