@@ -100,6 +100,76 @@ void ModelCheck::Add(TimeNs t_ns, const UpdateResult& update, const StateVec& st
   if (count_ < kWindow) ++count_;
 }
 
+std::array<double, ModelCheck::kNumSeries> ModelCheck::Means() const {
+  std::array<double, kNumSeries> means{};
+  for (int k = 0; k < kNumSeries; ++k) {
+    double m = 0;
+    for (int i = 0; i < count_; ++i) m += data_[static_cast<size_t>(k)][static_cast<size_t>(i)];
+    means[static_cast<size_t>(k)] = m / count_;
+  }
+  return means;
+}
+
+// Correlation of series y and x over the window, as a z (r sqrt(n)).
+double ModelCheck::CorrZ(const std::array<double, kNumSeries>& means, Series y, Series x) const {
+  const double my = means[y], mx = means[x];
+  double sxy = 0, sxx = 0, syy = 0;
+  for (int i = 0; i < count_; ++i) {
+    const double a = data_[x][static_cast<size_t>(i)] - mx,
+                 b = data_[y][static_cast<size_t>(i)] - my;
+    sxy += a * b;
+    sxx += a * a;
+    syy += b * b;
+  }
+  return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) * std::sqrt(static_cast<double>(count_))
+                              : 0.0;
+}
+
+// Partial correlation of y and x with `control`'s linear part removed from both, as a z.
+double ModelCheck::PartialZ(const std::array<double, kNumSeries>& means, Series y, Series x,
+                            Series control) const {
+  const double n_sqrt = std::sqrt(static_cast<double>(count_));
+  const double rxy = CorrZ(means, y, x) / n_sqrt, rxc = CorrZ(means, x, control) / n_sqrt,
+               ryc = CorrZ(means, y, control) / n_sqrt;
+  const double d = (1.0 - rxc * rxc) * (1.0 - ryc * ryc);
+  return d > 1e-9 ? (rxy - rxc * ryc) / std::sqrt(d) * n_sqrt : 0.0;
+}
+
+// The heading innovation's mean while moving, as a z (0 with 10 or fewer such samples).
+double ModelCheck::HeadingBiasZ() const {
+  double hm = 0, hs = 0;
+  int moving = 0;
+  for (int i = 0; i < count_; ++i) {
+    if (data_[kMoving][static_cast<size_t>(i)] > 0.5) {
+      hm += data_[kHeading][static_cast<size_t>(i)];
+      ++moving;
+    }
+  }
+  if (moving <= 10) return 0.0;
+  hm /= moving;
+  for (int i = 0; i < count_; ++i) {
+    if (data_[kMoving][static_cast<size_t>(i)] > 0.5)
+      hs += std::pow(data_[kHeading][static_cast<size_t>(i)] - hm, 2);
+  }
+  hs = std::sqrt(hs / moving);
+  return hs > 0 ? hm / (hs / std::sqrt(static_cast<double>(moving))) : 0.0;
+}
+
+// The z of every term this check measures, in kOnlineTerms' order.
+std::array<double, ModelCheck::kNumOnlineTerms> ModelCheck::TermZ(
+    const std::array<double, kNumSeries>& m) const {
+  return {CorrZ(m, kAlong, kDv),
+          CorrZ(m, kHeading, kDw),
+          HeadingBiasZ(),
+          CorrZ(m, kCross, kW),
+          CorrZ(m, kAlong, kW),
+          CorrZ(m, kAlong, kAbsW),
+          PartialZ(m, kAlong, kAbsV, kV),
+          PartialZ(m, kHeading, kAbsW, kW),
+          PartialZ(m, kCross, kLatAcc, kW),
+          PartialZ(m, kHeading, kWSq, kW)};
+}
+
 ModelCheckVerdict ModelCheck::Verdict() const {
   ModelCheckVerdict v;
   v.window = count_;
@@ -108,76 +178,18 @@ ModelCheckVerdict ModelCheck::Verdict() const {
     v.evidence = "no innovations yet";
     return v;
   }
-  const int n = count_;
-  // Every series' mean once: the correlations below share them.
-  std::array<double, kNumSeries> means{};
-  for (int k = 0; k < kNumSeries; ++k) {
-    double m = 0;
-    for (int i = 0; i < n; ++i) m += data_[static_cast<size_t>(k)][static_cast<size_t>(i)];
-    means[static_cast<size_t>(k)] = m / n;
-  }
-  auto mean = [&](Series k) { return means[static_cast<size_t>(k)]; };
-  auto corr_z = [&](Series y, Series x) {
-    const double my = mean(y), mx = mean(x);
-    double sxy = 0, sxx = 0, syy = 0;
-    for (int i = 0; i < n; ++i) {
-      const double a = data_[x][static_cast<size_t>(i)] - mx,
-                   b = data_[y][static_cast<size_t>(i)] - my;
-      sxy += a * b;
-      sxx += a * a;
-      syy += b * b;
-    }
-    return (sxx > 0 && syy > 0) ? sxy / std::sqrt(sxx * syy) * std::sqrt(static_cast<double>(n))
-                                : 0.0;
-  };
-  // Partial correlation of y and x with `control`'s linear part removed from both, as a z.
-  auto partial_z = [&](Series y, Series x, Series control) {
-    const double n_sqrt = std::sqrt(static_cast<double>(n));
-    const double rxy = corr_z(y, x) / n_sqrt, rxc = corr_z(x, control) / n_sqrt,
-                 ryc = corr_z(y, control) / n_sqrt;
-    const double d = (1.0 - rxc * rxc) * (1.0 - ryc * ryc);
-    return d > 1e-9 ? (rxy - rxc * ryc) / std::sqrt(d) * n_sqrt : 0.0;
-  };
-  v.nis_mean = mean(kNis);
+  const std::array<double, kNumSeries> means = Means();
+  v.nis_mean = means[kNis];
   if (count_ < options_.min_samples) {
     v.evidence =
         "collecting: " + std::to_string(count_) + " of " + std::to_string(kWindow) + " innovations";
     return v;
   }
-  // Heading bias while moving.
-  double hm = 0, hs = 0;
-  int moving = 0;
-  for (int i = 0; i < n; ++i) {
-    if (data_[kMoving][static_cast<size_t>(i)] > 0.5) {
-      hm += data_[kHeading][static_cast<size_t>(i)];
-      ++moving;
-    }
-  }
-  double bias_z = 0.0;
-  if (moving > 10) {
-    hm /= moving;
-    for (int i = 0; i < n; ++i) {
-      if (data_[kMoving][static_cast<size_t>(i)] > 0.5)
-        hs += std::pow(data_[kHeading][static_cast<size_t>(i)] - hm, 2);
-    }
-    hs = std::sqrt(hs / moving);
-    bias_z = hs > 0 ? hm / (hs / std::sqrt(static_cast<double>(moving))) : 0.0;
-  }
-  // The z of every term this check measures, in kOnlineTerms' order.
-  const double term_z[kNumOnlineTerms] = {corr_z(kAlong, kDv),
-                                          corr_z(kHeading, kDw),
-                                          bias_z,
-                                          corr_z(kCross, kW),
-                                          corr_z(kAlong, kW),
-                                          corr_z(kAlong, kAbsW),
-                                          partial_z(kAlong, kAbsV, kV),
-                                          partial_z(kHeading, kAbsW, kW),
-                                          partial_z(kCross, kLatAcc, kW),
-                                          partial_z(kHeading, kWSq, kW)};
+  const std::array<double, kNumOnlineTerms> term_z = TermZ(means);
   const Suspect* best = nullptr;
   double best_z = 0.0;
   for (const auto& c : suspects_) {
-    const double z = term_z[c.term];
+    const double z = term_z[static_cast<size_t>(c.term)];
     if (std::abs(z) >= options_.z_threshold &&
         (best == nullptr || std::abs(z) > std::abs(best_z))) {
       best = &c;
@@ -186,33 +198,39 @@ ModelCheckVerdict ModelCheck::Verdict() const {
   }
   const bool nis_ok = v.nis_mean < 3.0 * v.nis_expected;
   v.consistent = best == nullptr && nis_ok && count_ == kWindow;
+  Describe(best, best_z, nis_ok, &v);
+  return v;
+}
+
+// The verdict's suspect, confidence, candidates and evidence.
+void ModelCheck::Describe(const Suspect* best, double best_z, bool nis_ok,
+                          ModelCheckVerdict* v) const {
   std::ostringstream ev;
   ev.precision(3);
   if (best != nullptr) {
-    v.suspected_effect = best->effect;
-    v.confidence = 1.0 - std::exp(-(std::abs(best_z) - options_.z_threshold));
+    v->suspected_effect = best->effect;
+    v->confidence = 1.0 - std::exp(-(std::abs(best_z) - options_.z_threshold));
     ev << kOnlineTerms[best->term].what << " (z = " << best_z << ")";
     for (const auto& c : suspects_) {
-      if (c.term == best->term) v.candidates.push_back(c.effect);
+      if (c.term == best->term) v->candidates.push_back(c.effect);
     }
-    if (v.candidates.size() > 1) {
+    if (v->candidates.size() > 1) {
       ev << ": the signature of";
-      for (const auto& name : v.candidates) ev << " " << name;
+      for (const auto& name : v->candidates) ev << " " << name;
       ev << " (not told apart by this term)";
     }
   } else if (!nis_ok) {
-    v.suspected_effect = "unknown";
-    v.confidence = 0.5;
-    ev << "innovations too large (mean NIS " << v.nis_mean << ", expected " << v.nis_expected
+    v->suspected_effect = "unknown";
+    v->confidence = 0.5;
+    ev << "innovations too large (mean NIS " << v->nis_mean << ", expected " << v->nis_expected
        << ") without a known signature";
   }
   if (best == nullptr && nis_ok && count_ < kWindow) {
-    ev << "no signature so far; collecting: " << n << " of " << kWindow << " innovations";
+    ev << "no signature so far; collecting: " << count_ << " of " << kWindow << " innovations";
   } else {
-    ev << "; window " << n << " innovations";
+    ev << "; window " << count_ << " innovations";
   }
-  v.evidence = ev.str();
-  return v;
+  v->evidence = ev.str();
 }
 
 }  // namespace kincal

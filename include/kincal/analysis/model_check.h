@@ -101,6 +101,14 @@ class ModelCheck {
   int count_ = 0;
   int next_ = 0;
   std::vector<Suspect> suspects_;  // in kOnlineTerms order, effects in registration order
+
+  std::array<double, kNumSeries> Means() const;
+  double CorrZ(const std::array<double, kNumSeries>& means, Series y, Series x) const;
+  double PartialZ(const std::array<double, kNumSeries>& means, Series y, Series x,
+                  Series control) const;
+  double HeadingBiasZ() const;
+  std::array<double, kNumOnlineTerms> TermZ(const std::array<double, kNumSeries>& means) const;
+  void Describe(const Suspect* best, double best_z, bool nis_ok, ModelCheckVerdict* v) const;
 };
 
 }  // namespace kincal
