@@ -143,7 +143,7 @@ void FuzzYaml(const uint8_t* data, size_t size) {
 
 void FuzzCheckpoint(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("checkpoint.json", data, size);
-  (void)ReadCheckpoint(path);  // a Status, never an exception
+  (void)kincal::ReadCheckpoint(path);  // a Status, never an exception
 }
 
 void FuzzLists(const uint8_t* data, size_t size) {
