@@ -179,23 +179,29 @@ double PixelPoseMeter::CentreScatter(double noise_grey, std::mt19937_64& rng) {
     }
     return false;
   };
-  const auto bad = std::count_if(frames.begin(), frames.end(), gross);
-  const bool broken =
-      static_cast<double>(bad) > kMaxGrossFraction * static_cast<double>(frames.size());
+  std::vector<char> keep(frames.size());
+  size_t bad = 0;
+  for (size_t k = 0; k < frames.size(); ++k) {
+    keep[k] = !gross(frames[k]);
+    bad += keep[k] ? 0 : 1;
+  }
+  if (static_cast<double>(bad) > kMaxGrossFraction * static_cast<double>(frames.size())) {
+    std::fill(keep.begin(), keep.end(), 1);  // broken: the scatter of every frame
+  }
   double ss = 0.0;
   int dof = 0;
   for (size_t i = 0; i < n; ++i) {
     Eigen::Vector2d mean = Eigen::Vector2d::Zero();
     int count = 0;
-    for (const auto& f : frames) {
-      if (broken || !gross(f)) {
-        mean += f[i];
+    for (size_t k = 0; k < frames.size(); ++k) {
+      if (keep[k]) {
+        mean += frames[k][i];
         ++count;
       }
     }
     mean /= static_cast<double>(count);
-    for (const auto& f : frames) {
-      if (broken || !gross(f)) ss += (f[i] - mean).squaredNorm();
+    for (size_t k = 0; k < frames.size(); ++k) {
+      if (keep[k]) ss += (frames[k][i] - mean).squaredNorm();
     }
     dof += 2 * (count - 1);
   }

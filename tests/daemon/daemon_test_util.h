@@ -14,18 +14,13 @@
 #include "kincal/io/checkpoint.h"
 #include "kincal/sim/scenario.h"
 #include "source_dir.h"
+#include "temp_path.h"
 
 namespace kincal::daemon::test_util {
 
 inline const std::string kConfigDir = ::kincal::testing::SourceDir() + "/config";
 
-// A file in this process's scratch folder.
-inline std::string TempPath(const std::string& name) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("kincal_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using ::kincal::testing::TempPath;
 
 // The shipped simulated robot, on memq://, as fast as possible (lossless).
 inline DaemonConfig SimConfig(double duration_s) {

@@ -2,7 +2,6 @@
 #include "kincal/io/checkpoint.h"
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <filesystem>
@@ -16,15 +15,12 @@
 #include <sstream>
 #include <thread>
 
+#include "temp_path.h"
+
 namespace kincal {
 namespace {
 
-std::string TempPath(const std::string& name) {
-  const auto dir =
-      std::filesystem::temp_directory_path() / ("kincal_ck_test_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  return (dir / name).string();
-}
+using ::kincal::testing::TempPath;
 
 Checkpoint Good() {
   Checkpoint c;
