@@ -96,7 +96,10 @@ class Effect {
   virtual void InitStates(const Jet* p, const Jet* u, Jet* s) const = 0;
   virtual void InitStates(const BJet* p, const BJet* u, BJet* s) const = 0;
   // Advances internal states over dt (s) towards target control u (after MapControls),
-  // and replaces u by the mean realised control over the step.
+  // and replaces u by the mean realised control over the step. For a constant target the
+  // states must be exact over any dt (one call over 2h equals two over h): a walk of the
+  // states alone (a warm-up) takes one step per command interval when no other effect
+  // has states.
   virtual void Advance(const double* p, double dt, double* s, double* u) const = 0;
   virtual void Advance(const Jet* p, const Jet& dt, Jet* s, Jet* u) const = 0;
   virtual void Advance(const BJet* p, const BJet& dt, BJet* s, BJet* u) const = 0;

@@ -88,6 +88,12 @@ class System {
   template <typename T>
   void Propagate(const T* x_in, T* x_out, double t0_s, double t1_s, const ControlSignal& u,
                  const T* v) const;
+  // Only the effect states of x from t0 to t1 as Propagate moves them (they do not depend
+  // on the pose; one step per command interval when one effect has states, to rounding);
+  // the pose is left as it is. For warming a lag up through a command history whose
+  // motion is not wanted.
+  template <typename T>
+  void AdvanceEffectStates(T* x, double t0_s, double t1_s, const ControlSignal& u) const;
   // Measured target pose z[3] of augmented state x.
   template <typename T>
   void Measure(const T* x, T* z) const;
@@ -101,6 +107,9 @@ class System {
   void ApplyControlMap(const T* x, T* u) const;
   template <typename T>
   Twist<T> RealisedTwist(const T* x, const T* u) const;
+  // Propagate's walk over the command intervals; the pose moves only when kMovePose.
+  template <bool kMovePose, typename T>
+  void Walk(T* x, double t0_s, double t1_s, const ControlSignal& signal, const T* v) const;
 
   std::shared_ptr<const KinematicModel> model_;
   std::vector<std::shared_ptr<const Effect>> effects_;
@@ -110,6 +119,7 @@ class System {
   std::vector<int> effect_state_offset_;  // index into state vector
   int num_params_ = 0;
   int num_effect_states_ = 0;
+  int stateful_effects_ = 0;  // effects with states
   bool time_varying_ = false;
 };
 

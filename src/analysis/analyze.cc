@@ -140,7 +140,9 @@ std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidate
   const Eigen::Index old_np = current.fit.p.size();
   std::vector<std::string> todo;
   for (const auto& c : candidates) {
-    if (std::find(accepted.begin(), accepted.end(), c) == accepted.end()) todo.push_back(c);
+    const bool repeats = std::any_of(accepted.begin(), accepted.end(),
+                                     [&](const std::string& a) { return analysis::Repeats(c, a); });
+    if (!repeats) todo.push_back(c);
   }
   // Parallel over candidates, each solve on one thread: the result does not depend on
   // the thread count.

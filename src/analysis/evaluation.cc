@@ -19,7 +19,7 @@ Evaluation Evaluate(const System& sys, const Eigen::VectorXd& p, const Dataset& 
     for (const auto& w : d.eval) {
       const double ts = d.t[static_cast<size_t>(w.start)];
       if (ts > t) {
-        sys.Propagate(x.data(), x.data(), t, ts, u, static_cast<const double*>(nullptr));
+        sys.AdvanceEffectStates(x.data(), t, ts, u);
         t = ts;
       }
       states.push_back(x);

@@ -67,6 +67,17 @@ std::vector<std::string> Candidates(const KinematicModel& m, const AnalyzeOption
   return out;
 }
 
+bool Repeats(const std::string& candidate, const std::string& accepted) {
+  EffectSpec c, a;
+  if (!ParseEffectSpec(candidate, &c).ok() || !ParseEffectSpec(accepted, &a).ok()) return false;
+  if (c.name != a.name) return false;
+  if (c.channels.empty() || a.channels.empty()) return true;  // all channels
+  for (const auto& ch : c.channels) {
+    if (std::find(a.channels.begin(), a.channels.end(), ch) != a.channels.end()) return true;
+  }
+  return false;
+}
+
 FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
                      const std::vector<std::string>& effects, int fit_windows) {
   FitReport r;

@@ -19,6 +19,10 @@ namespace kincal::analysis {
 // Effect specs to try on the model: every registered effect that applies (and, for
 // channel-wise effects, one per channel), the user's list, or none.
 std::vector<std::string> Candidates(const KinematicModel& m, const AnalyzeOptions& o);
+// True when `candidate` is an effect of the same kind as `accepted` on a channel it
+// already acts on ("actuator_lag[omega]" after "actuator_lag"): a second copy's parameters
+// trade off with the first's, so it is not a candidate.
+bool Repeats(const std::string& candidate, const std::string& accepted);
 
 FitReport MakeReport(const System& sys, const Fit& f, const Evaluation& e,
                      const std::vector<std::string>& effects, int fit_windows);

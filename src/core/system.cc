@@ -86,6 +86,7 @@ System::System(std::shared_ptr<const KinematicModel> model,
     effect_state_offset_.push_back(offset);
     offset += e->num_states();
     num_effect_states_ += e->num_states();
+    stateful_effects_ += e->num_states() > 0 ? 1 : 0;
   }
 }
 
@@ -193,6 +194,62 @@ Twist<T> System::RealisedTwist(const T* x, const T* u) const {
   return tw;
 }
 
+template <bool kMovePose, typename T>
+void System::Walk(T* x, double t0_s, double t1_s, const ControlSignal& signal, const T* v) const {
+  if (!(t1_s > t0_s)) return;
+  if (!kMovePose && num_effect_states_ == 0) return;
+  const int nc = num_controls();
+  const T delay = Delay(x);
+  const double d = ScalarOf(delay);
+  const int size = static_cast<int>(signal.size());
+  int idx = signal.IndexAt(t0_s - d);
+  T t(t0_s);
+  while (true) {
+    const bool last = !(idx + 1 < size && signal.TimeAt(idx + 1) + d < t1_s);
+    const T seg_end = last ? T(t1_s) : T(signal.TimeAt(idx + 1)) + delay;
+    const T dt = seg_end - t;
+    if (ScalarOf(dt) > 0.0) {
+      T u[kMaxControls];
+      const auto& cmd = signal.ValuesAt(idx);
+      for (int c = 0; c < nc; ++c) u[c] = T(cmd[static_cast<size_t>(c)]);
+      if (v != nullptr) {
+        for (int c = 0; c < nc; ++c) u[c] += v[c];
+      }
+      ApplyControlMap(x, u);
+      if (!time_varying_) {
+        if constexpr (kMovePose) {
+          const Twist<T> tw = RealisedTwist(x, u);
+          IntegrateArc(tw, dt, &x[0], &x[1], &x[2]);
+        }
+      } else {
+        // Sub-steps for the pose. The states alone are exact in one step (Effect::Advance)
+        // unless an effect's states follow another's sub-step means.
+        const int steps =
+            !kMovePose && stateful_effects_ == 1
+                ? 1
+                : std::max(1, static_cast<int>(std::ceil(ScalarOf(dt) / options_.max_substep_s)));
+        const T h = dt / static_cast<double>(steps);
+        for (int s = 0; s < steps; ++s) {
+          T us[kMaxControls];
+          std::copy_n(u, nc, us);
+          for (size_t k = 0; k < effects_.size(); ++k) {
+            if (effects_[k]->num_states() > 0) {
+              effects_[k]->Advance(x + effect_param_offset_[k], h, x + effect_state_offset_[k], us);
+            }
+          }
+          if constexpr (kMovePose) {
+            const Twist<T> tw = RealisedTwist(x, us);
+            IntegrateArc(tw, h, &x[0], &x[1], &x[2]);
+          }
+        }
+      }
+    }
+    if (last) break;
+    t = seg_end;
+    ++idx;
+  }
+}
+
 template <typename T>
 void System::Propagate(const T* x_in, T* x_out, double t0_s, double t1_s,
                        const ControlSignal& signal, const T* v) const {
@@ -200,55 +257,17 @@ void System::Propagate(const T* x_in, T* x_out, double t0_s, double t1_s,
   const int nc = num_controls();
   T x[kMaxState];
   std::copy_n(x_in, n, x);
-  if (t1_s > t0_s) {
-    const T delay = Delay(x);
-    const double d = ScalarOf(delay);
-    const int size = static_cast<int>(signal.size());
-    int idx = signal.IndexAt(t0_s - d);
-    T t(t0_s);
-    while (true) {
-      const bool last = !(idx + 1 < size && signal.TimeAt(idx + 1) + d < t1_s);
-      const T seg_end = last ? T(t1_s) : T(signal.TimeAt(idx + 1)) + delay;
-      const T dt = seg_end - t;
-      if (ScalarOf(dt) > 0.0) {
-        T u[kMaxControls];
-        const auto& cmd = signal.ValuesAt(idx);
-        for (int c = 0; c < nc; ++c) u[c] = T(cmd[static_cast<size_t>(c)]);
-        if (v != nullptr) {
-          for (int c = 0; c < nc; ++c) u[c] += v[c];
-        }
-        ApplyControlMap(x, u);
-        if (!time_varying_) {
-          const Twist<T> tw = RealisedTwist(x, u);
-          IntegrateArc(tw, dt, &x[0], &x[1], &x[2]);
-        } else {
-          const int steps =
-              std::max(1, static_cast<int>(std::ceil(ScalarOf(dt) / options_.max_substep_s)));
-          const T h = dt / static_cast<double>(steps);
-          for (int s = 0; s < steps; ++s) {
-            T us[kMaxControls];
-            std::copy_n(u, nc, us);
-            for (size_t k = 0; k < effects_.size(); ++k) {
-              if (effects_[k]->num_states() > 0) {
-                effects_[k]->Advance(x + effect_param_offset_[k], h, x + effect_state_offset_[k],
-                                     us);
-              }
-            }
-            const Twist<T> tw = RealisedTwist(x, us);
-            IntegrateArc(tw, h, &x[0], &x[1], &x[2]);
-          }
-        }
-      }
-      if (last) break;
-      t = seg_end;
-      ++idx;
-    }
-  }
+  Walk<true>(x, t0_s, t1_s, signal, v);
   if (v != nullptr) {
     for (int i = 0; i < kPoseDim; ++i) x[i] += v[nc + i];
     for (int i = 0; i < num_effect_states_; ++i) x[state_offset() + i] += v[nc + kPoseDim + i];
   }
   std::copy_n(x, n, x_out);
+}
+
+template <typename T>
+void System::AdvanceEffectStates(T* x, double t0_s, double t1_s, const ControlSignal& u) const {
+  Walk<false>(x, t0_s, t1_s, u, static_cast<const T*>(nullptr));
 }
 
 template <typename T>
@@ -271,6 +290,10 @@ template void System::Propagate<Jet>(const Jet*, Jet*, double, double, const Con
 template void System::Propagate<BJet>(const BJet*, BJet*, double, double, const ControlSignal&,
                                       const BJet*) const;
 template void System::Measure<BJet>(const BJet*, BJet*) const;
+template void System::AdvanceEffectStates<double>(double*, double, double,
+                                                  const ControlSignal&) const;
+template void System::AdvanceEffectStates<Jet>(Jet*, double, double, const ControlSignal&) const;
+template void System::AdvanceEffectStates<BJet>(BJet*, double, double, const ControlSignal&) const;
 template void System::InitEffectStates<BJet>(BJet*, const ControlSignal&, double) const;
 template BJet System::Delay<BJet>(const BJet*) const;
 template void System::Measure<double>(const double*, double*) const;

@@ -50,12 +50,10 @@ class SegmentCost final : public ceres::CostFunction {
     for (int i = 0; i < np; ++i) x[3 + i] = Seed<T>(parameters[1][i], 3 + i);
     for (int i = sys_.state_offset(); i < sys_.state_dim(); ++i) x[i] = T(0.0);
     if (sys_.num_states() > 0 && warmup_ > 0.0) {
-      // Warm the effect states up through the command history; the pose moved by the
-      // warm-up is discarded (the segment's start pose is the free parameter block).
-      const T pose[3] = {x[0], x[1], x[2]};
+      // Warm the effect states up through the command history; the pose stays (the
+      // segment's start pose is the free parameter block).
       sys_.InitEffectStates(x, u_, t0_ - warmup_);
-      sys_.Propagate(x, x, t0_ - warmup_, t0_, u_, static_cast<const T*>(nullptr));
-      for (int i = 0; i < kPoseDim; ++i) x[i] = pose[i];
+      sys_.AdvanceEffectStates(x, t0_ - warmup_, t0_, u_);
     } else {
       sys_.InitEffectStates(x, u_, t0_);
     }

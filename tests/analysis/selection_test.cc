@@ -40,6 +40,18 @@ bool Try(const std::string& spec, const SelectionState& current, const Dataset& 
   return out->fit.ok;
 }
 
+// A second copy of an effect on a channel it already acts on is not a candidate; the same
+// kind on another channel, or another kind, is.
+TEST(Selection, AnEffectIsNotRepeatedOnItsChannel) {
+  EXPECT_TRUE(Repeats("actuator_lag[omega]", "actuator_lag"));
+  EXPECT_TRUE(Repeats("actuator_lag", "actuator_lag[v]"));
+  EXPECT_TRUE(Repeats("actuator_lag[v]", "actuator_lag[v]"));
+  EXPECT_TRUE(Repeats("dead_band[omega_l,omega_r]", "dead_band[omega_r]"));
+  EXPECT_FALSE(Repeats("actuator_lag[omega]", "actuator_lag[v]"));
+  EXPECT_FALSE(Repeats("time_offset", "actuator_lag"));
+  EXPECT_FALSE(Repeats("not an effect[", "actuator_lag"));
+}
+
 TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
   const Recording rec = testing::UnicycleRecording(90.0, {"time_offset"}, {{"delay_s", 0.25}}, 12);
   AnalyzeOptions o;

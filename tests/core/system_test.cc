@@ -90,6 +90,29 @@ TEST_P(ModelTest, AutodiffJacobiansMatchFiniteDifferences) {
 }
 
 class BareModelTest : public ::testing::TestWithParam<int> {};
+// The state-only walk (warm-ups) moves the effect states as Propagate does, in one step per
+// command interval instead of 5 ms sub-steps, and leaves the pose where it was.
+TEST_P(BareModelTest, EffectStatesAloneFollowPropagate) {
+  const auto sc = AllModelScenarios()[static_cast<size_t>(GetParam())];
+  std::vector<std::string> effects = {"time_offset", "actuator_lag"};
+  if (MakeModel(sc.model)->has_steering()) effects.push_back("backlash");
+  const System sys = MakeSystem(sc.model, effects);
+  ASSERT_GT(sys.num_states(), 0);
+  const ControlSignal u = RandomControls(sys.num_controls(), sc.lo, sc.hi, 7);
+  const StateVec x0 = TestState(sys, sc.truth, u);
+  StateVec full(x0.size()), alone = x0;
+  sys.Propagate(x0.data(), full.data(), 0.31, 2.77, u, static_cast<const double*>(nullptr));
+  sys.AdvanceEffectStates(alone.data(), 0.31, 2.77, u);
+  const int off = sys.state_offset();
+  double moved = 0.0;
+  for (int i = off; i < sys.state_dim(); ++i) {
+    EXPECT_NEAR(alone[i], full[i], 1e-12 * std::max(1.0, std::abs(full[i])))
+        << sc.model << " " << sys.StateName(i);
+    moved = std::max(moved, std::abs(full[i] - x0[i]));
+  }
+  EXPECT_GT(moved, 1e-3) << "the controls should move the states";
+  for (int i = 0; i < off; ++i) EXPECT_EQ(alone[i], x0[i]) << sys.StateName(i);
+}
 
 TEST_P(BareModelTest, ExactIntegrationMatchesFineEuler) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(GetParam())];
