@@ -7,8 +7,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "estimation/ceres_logging.h"
 #include "kincal/angles.h"
+#include "kincal/estimation/ceres_logging.h"
 
 namespace kincal {
 namespace {

@@ -1,4 +1,4 @@
-#include "estimation/ceres_logging.h"
+#include "kincal/estimation/ceres_logging.h"
 
 #include <glog/logging.h>
 #include <spdlog/spdlog.h>

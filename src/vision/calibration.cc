@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "estimation/ceres_logging.h"
+#include "kincal/estimation/ceres_logging.h"
 
 namespace kincal::vision {
 namespace {

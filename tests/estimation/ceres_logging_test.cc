@@ -1,4 +1,4 @@
-#include "estimation/ceres_logging.h"
+#include "kincal/estimation/ceres_logging.h"
 
 #include <gtest/gtest.h>
 #include <spdlog/sinks/ringbuffer_sink.h>
