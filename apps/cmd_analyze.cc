@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <thread>
@@ -50,15 +51,133 @@ std::string Python() {
   return std::filesystem::exists(venv) ? venv : "python3";
 }
 
+struct AnalyzeArgs {
+  std::string model, controls, poses, log, mrclam, out, init, effects = "auto", pose_sigma;
+  int robot = 0;
+  AnalyzeOptions opt;
+};
+
+// The options the command line asks for (throws naming the option at fault).
+AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
+  AnalyzeOptions o = a->opt;
+  if (!a->mrclam.empty()) {
+    if (a->model.empty()) a->model = "unicycle";
+    if (a->robot < 1) throw std::runtime_error("--mrclam needs --robot N (1..5 in dataset 6)");
+  }
+  if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
+  o.model = a->model;
+  if (const Status s = ParseInitList(a->init, &o.init); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
+  if (a->effects == "auto" || a->effects == "none") {
+    o.effects_mode = a->effects;
+  } else {
+    o.effects_mode = "list";
+    if (const Status s = ParseEffectList(a->effects, &o.effects); !s.ok()) {
+      throw std::runtime_error(s.message());
+    }
+  }
+  if (!a->pose_sigma.empty()) {
+    o.pose_sigma = ParsePoseSigma(a->pose_sigma);
+  }
+  return o;
+}
+
+// The recording from the one input the command line names.
+Recording ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
+  const auto model = MakeModel(o.model);
+  const int sources =
+      !a.mrclam.empty() + !a.log.empty() + (!a.controls.empty() || !a.poses.empty());
+  if (sources != 1)
+    throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
+  Recording rec;
+  if (!a.mrclam.empty()) {
+    if (o.model != "unicycle")
+      throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
+    rec = ReadMrclam(a.mrclam, a.robot);
+  } else if (!a.log.empty()) {
+    rec = ReadLcmLog(a.log, *model);
+  } else {
+    if (a.controls.empty() || a.poses.empty())
+      throw std::runtime_error("--controls and --poses go together");
+    rec = ReadCsvRecording(a.controls, a.poses, *model);
+  }
+  std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
+            << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
+            << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
+  return rec;
+}
+
+// A bar on a terminal, a line per stage otherwise.
+std::function<void(double, const std::string&)> Progress() {
+  const bool tty = isatty(STDERR_FILENO);
+  return [tty](double f, const std::string& stage) {
+    const int width = 30;
+    const int filled = static_cast<int>(f * width);
+    if (tty) {
+      std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#')
+                << std::string(static_cast<size_t>(width - filled), ' ') << "] " << std::setw(3)
+                << static_cast<int>(f * 100) << "% " << std::left << std::setw(40)
+                << stage.substr(0, 40) << std::right << std::flush;
+      if (f >= 1.0) std::cerr << "\n";
+    } else {
+      static std::string last;
+      if (stage.substr(0, 8) != last.substr(0, 8))
+        std::cerr << "[" << static_cast<int>(f * 100) << "%] " << stage << "\n";
+      last = stage;
+    }
+  };
+}
+
+// Plots from the report's data (matplotlib); the report stands without them.
+void Plot(const std::string& out) {
+  const std::string script = PlotScript();
+  if (!script.empty()) {
+    const std::string cmd = Python() + " " + script + " " + out + " >/dev/null";
+    if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed (" << cmd << ")\n";
+  } else {
+    std::cerr << "warning: scripts/plot_analysis.py not found: no PNG plots\n";
+  }
+}
+
+// The terminal's summary: errors before and after, the final parameters, the effects.
+void PrintSummary(const AnalyzeResult& r, const std::string& out) {
+  std::cout << std::setprecision(4);
+  std::cout << "\nmodel " << r.model << ", residual weights " << r.pose_sigma[0] << " m / "
+            << r.pose_sigma[1] << " rad" << (r.pose_sigma_estimated ? " (estimated)" : "") << "\n";
+  std::cout << std::left << std::setw(28) << "" << std::setw(16) << "before"
+            << "after\n";
+  auto row = [](const std::string& n, double b, double af) {
+    std::cout << std::left << std::setw(28) << n << std::setw(16) << b << af << "\n";
+  };
+  row("fit position RMS [m]", r.before.fit.pos_rms_m, r.after.fit.pos_rms_m);
+  row("fit heading RMS [rad]", r.before.fit.heading_rms_rad, r.after.fit.heading_rms_rad);
+  row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
+  row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
+      r.after.heldout.heading_rms_rad);
+  std::cout << std::right << "parameters after:\n";
+  for (const auto& p : r.after.params) {
+    std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12)
+              << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
+  }
+  std::cout << "effects accepted:";
+  for (const auto& e : r.after.effects) std::cout << " " << e;
+  if (r.after.effects.empty()) std::cout << " none";
+  std::cout << "\n";
+  if (!r.before.unique)
+    std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
+  for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
+  std::cout << "goodness of fit: " << r.goodness.verdict << "\n";
+  if (r.goodness.judged && !r.goodness.explains) {
+    std::cerr << "kincal analyze: " << r.goodness.verdict << "\n";
+  }
+  std::cout << "wrote " << out << "/report.json, report.html, residuals.csv\n";
+}
+
 }  // namespace
 
 Command AddAnalyze(CLI::App& app) {
-  struct Args {
-    std::string model, controls, poses, log, mrclam, out, init, effects = "auto", pose_sigma;
-    int robot = 0;
-    AnalyzeOptions opt;
-  };
-  auto a = std::make_shared<Args>();
+  auto a = std::make_shared<AnalyzeArgs>();
   app.add_option("--model", a->model, "kinematic model (see `kincal models`)");
   app.add_option("--controls", a->controls, "controls CSV: t,<control names>");
   app.add_option("--poses", a->poses, "poses CSV: t,x,y,theta");
@@ -83,108 +202,16 @@ Command AddAnalyze(CLI::App& app) {
                  "result does not depend on it)")
       ->capture_default_str();
   return [a]() -> int {
-    AnalyzeOptions o = a->opt;
-    if (!a->mrclam.empty()) {
-      if (a->model.empty()) a->model = "unicycle";
-      if (a->robot < 1) throw std::runtime_error("--mrclam needs --robot N (1..5 in dataset 6)");
-    }
-    if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
-    o.model = a->model;
-    if (const Status s = ParseInitList(a->init, &o.init); !s.ok()) {
-      throw std::runtime_error(s.message());
-    }
-    if (a->effects == "auto" || a->effects == "none") {
-      o.effects_mode = a->effects;
-    } else {
-      o.effects_mode = "list";
-      if (const Status s = ParseEffectList(a->effects, &o.effects); !s.ok()) {
-        throw std::runtime_error(s.message());
-      }
-    }
-    if (!a->pose_sigma.empty()) {
-      o.pose_sigma = ParsePoseSigma(a->pose_sigma);
-    }
-    const auto model = MakeModel(o.model);
-    Recording rec;
-    const int sources =
-        !a->mrclam.empty() + !a->log.empty() + (!a->controls.empty() || !a->poses.empty());
-    if (sources != 1)
-      throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
-    if (!a->mrclam.empty()) {
-      if (o.model != "unicycle")
-        throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
-      rec = ReadMrclam(a->mrclam, a->robot);
-    } else if (!a->log.empty()) {
-      rec = ReadLcmLog(a->log, *model);
-    } else {
-      if (a->controls.empty() || a->poses.empty())
-        throw std::runtime_error("--controls and --poses go together");
-      rec = ReadCsvRecording(a->controls, a->poses, *model);
-    }
-    std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
-              << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
-              << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
-    const bool tty = isatty(STDERR_FILENO);
-    o.progress = [tty](double f, const std::string& stage) {
-      const int width = 30;
-      const int filled = static_cast<int>(f * width);
-      if (tty) {
-        std::cerr << "\r[" << std::string(static_cast<size_t>(filled), '#')
-                  << std::string(static_cast<size_t>(width - filled), ' ') << "] " << std::setw(3)
-                  << static_cast<int>(f * 100) << "% " << std::left << std::setw(40)
-                  << stage.substr(0, 40) << std::right << std::flush;
-        if (f >= 1.0) std::cerr << "\n";
-      } else {
-        static std::string last;
-        if (stage.substr(0, 8) != last.substr(0, 8))
-          std::cerr << "[" << static_cast<int>(f * 100) << "%] " << stage << "\n";
-        last = stage;
-      }
-    };
+    AnalyzeOptions o = OptionsFrom(a.get());
+    const Recording rec = ReadInput(*a, o);
+    o.progress = Progress();
     const AnalyzeResult r = Analyze(rec, o);
     if (const Status written = WriteAnalysisReport(r, a->out); !written.ok()) {
       std::cerr << "kincal analyze: the report was not written: " << written.message() << "\n";
       return 1;
     }
-    // Plots from the report's data (matplotlib); the report stands without them.
-    const std::string script = PlotScript();
-    if (!script.empty()) {
-      const std::string cmd = Python() + " " + script + " " + a->out + " >/dev/null";
-      if (std::system(cmd.c_str()) != 0) std::cerr << "warning: plotting failed (" << cmd << ")\n";
-    } else {
-      std::cerr << "warning: scripts/plot_analysis.py not found: no PNG plots\n";
-    }
-    std::cout << std::setprecision(4);
-    std::cout << "\nmodel " << r.model << ", residual weights " << r.pose_sigma[0] << " m / "
-              << r.pose_sigma[1] << " rad" << (r.pose_sigma_estimated ? " (estimated)" : "")
-              << "\n";
-    std::cout << std::left << std::setw(28) << "" << std::setw(16) << "before"
-              << "after\n";
-    auto row = [](const std::string& n, double b, double af) {
-      std::cout << std::left << std::setw(28) << n << std::setw(16) << b << af << "\n";
-    };
-    row("fit position RMS [m]", r.before.fit.pos_rms_m, r.after.fit.pos_rms_m);
-    row("fit heading RMS [rad]", r.before.fit.heading_rms_rad, r.after.fit.heading_rms_rad);
-    row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
-    row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
-        r.after.heldout.heading_rms_rad);
-    std::cout << std::right << "parameters after:\n";
-    for (const auto& p : r.after.params) {
-      std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12)
-                << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
-    }
-    std::cout << "effects accepted:";
-    for (const auto& e : r.after.effects) std::cout << " " << e;
-    if (r.after.effects.empty()) std::cout << " none";
-    std::cout << "\n";
-    if (!r.before.unique)
-      std::cout << "warning: the baseline optimum is not unique: " << r.before.uniqueness << "\n";
-    for (const auto& w : r.warnings) std::cout << "warning: " << w << "\n";
-    std::cout << "goodness of fit: " << r.goodness.verdict << "\n";
-    if (r.goodness.judged && !r.goodness.explains) {
-      std::cerr << "kincal analyze: " << r.goodness.verdict << "\n";
-    }
-    std::cout << "wrote " << a->out << "/report.json, report.html, residuals.csv\n";
+    Plot(a->out);
+    PrintSummary(r, a->out);
     return 0;
   };
 }

@@ -85,6 +85,25 @@ std::string CameraInfoPath(const std::string& out) {
   return p.string() + ".camera_info.yaml";
 }
 
+// "WxH" (--image-size) into *w, *h; throws naming the option.
+void ParseImageSize(const std::string& size, int* w, int* h) {
+  static const std::regex re(R"((\d+)x(\d+))");
+  std::smatch m;
+  if (!std::regex_match(size, m, re))
+    throw std::runtime_error("--image-size '" + size + "': expected WxH, e.g. 640x480");
+  auto dim = [&](const std::string& text) {
+    int v = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || v < 1 || v > kMaxImageSide) {
+      throw std::runtime_error("--image-size '" + size + "': each side must be 1 to " +
+                               std::to_string(kMaxImageSide) + " pixels");
+    }
+    return v;
+  };
+  *w = dim(m[1]);
+  *h = dim(m[2]);
+}
+
 }  // namespace
 
 Command AddCamcal(CLI::App& app) {
@@ -112,21 +131,7 @@ Command AddCamcal(CLI::App& app) {
       throw std::runtime_error(
           "give either --images (with --board) or --points (with --image-size)");
     if (!a->points.empty()) {
-      static const std::regex re(R"((\d+)x(\d+))");
-      std::smatch m;
-      if (!std::regex_match(a->size, m, re))
-        throw std::runtime_error("--image-size '" + a->size + "': expected WxH, e.g. 640x480");
-      auto dim = [&](const std::string& text) {
-        int v = 0;
-        const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-        if (ec != std::errc() || end != text.data() + text.size() || v < 1 || v > kMaxImageSide) {
-          throw std::runtime_error("--image-size '" + a->size + "': each side must be 1 to " +
-                                   std::to_string(kMaxImageSide) + " pixels");
-        }
-        return v;
-      };
-      opt.width = dim(m[1]);
-      opt.height = dim(m[2]);
+      ParseImageSize(a->size, &opt.width, &opt.height);
       views = vision::ReadCalibrationPoints(a->points);
     } else {
       if (a->board.empty()) throw std::runtime_error("--images needs --board KIND:COLSxROWS:PITCH");

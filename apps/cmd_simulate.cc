@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <map>
@@ -19,6 +20,117 @@
 #include "kincal/sim/simulator.h"
 
 namespace kincal::app {
+
+namespace {
+
+struct SimulatedRun {
+  ControlSignal cmd{1, 0};
+  std::vector<PoseMeasurement> meas;
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+};
+
+// The scenario's commands, the true robot's motion and the camera's noisy poses of it.
+SimulatedRun SimulateScenario(const Scenario& sc, const System& truth_sys,
+                              const VecN<kMaxState>& p_true, const std::string& config) {
+  SimulatedRun run;
+  std::mt19937_64 rng(sc.seed);
+  const TimeNs t1 = SecondsToNs(sc.duration_s);
+  run.cmd = ControlSignal(truth_sys.num_controls(), 0);
+  if (sc.profile == "smooth") {
+    AppendSmoothRandom(&run.cmd, 0, t1, sc.control_low, sc.control_high, sc.min_period_s,
+                       sc.control_rate_hz, rng);
+  } else if (sc.profile == "piecewise") {
+    AppendPiecewiseRandom(&run.cmd, 0, t1, sc.control_low, sc.control_high, sc.min_period_s,
+                          3.0 * sc.min_period_s, rng);
+  } else {
+    throw std::runtime_error(config + ": controls.profile must be smooth or piecewise");
+  }
+  const auto times = FrameTimes(0, t1, sc.camera, rng);
+  const StateVec x0 = truth_sys.MakeState(0.0, 0.0, 0.0, p_true, run.cmd, 0.0);
+  const auto traj = SimulateTruth(truth_sys, x0, run.cmd, times);
+  run.R = sc.pose_sigma.array().square().matrix().asDiagonal();
+  run.meas = MeasurePoses(traj, run.R, 0, rng);
+  return run;
+}
+
+// DIR/controls.csv and DIR/poses.csv, the input of `kincal analyze`.
+void ExportRecording(const std::string& dir, const System& sys, const SimulatedRun& run) {
+  std::filesystem::create_directories(dir);
+  std::ostringstream c, p;
+  c << "t";
+  for (const auto& ch : sys.model().controls()) c << "," << ch.name;
+  c << "\n" << std::setprecision(10);
+  for (size_t i = 0; i < run.cmd.size(); ++i) {
+    c << run.cmd.TimeAt(static_cast<int>(i));
+    for (int k = 0; k < sys.num_controls(); ++k)
+      c << "," << run.cmd.ValuesAt(static_cast<int>(i))[static_cast<size_t>(k)];
+    c << "\n";
+  }
+  p << "t,x,y,theta\n" << std::setprecision(10);
+  for (const auto& m : run.meas)
+    p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
+  WriteOutput(dir + "/controls.csv", c.str(), "controls CSV");
+  WriteOutput(dir + "/poses.csv", p.str(), "poses CSV");
+  std::cout << "wrote " << dir << "/controls.csv and poses.csv\n";
+}
+
+// The guess's covariance: each sigma a fraction of the guess (or of the default sigma).
+StateMat GuessCovariance(const System& est_sys, const VecN<kMaxState>& p_guess, double fraction) {
+  const int np = est_sys.num_params();
+  StateMat P0 = StateMat::Zero(np, np);
+  for (int i = 0; i < np; ++i) {
+    const double s = fraction * std::max(std::abs(p_guess[i]),
+                                         est_sys.params()[static_cast<size_t>(i)].default_sigma);
+    P0(i, i) = s * s;
+  }
+  return P0;
+}
+
+void PrintHeader(const Scenario& sc, const System& est_sys, size_t poses) {
+  std::cout << "Simulated " << sc.model << " (" << sc.profile << " controls, " << sc.duration_s
+            << " s, " << poses << " poses at " << sc.camera.rate_hz << " Hz), filter " << sc.filter
+            << ", seed " << sc.seed << "\n";
+  if (!sc.hidden_effects.empty()) {
+    std::cout << "hidden effects (not modelled by the estimator):";
+    for (const auto& e : sc.hidden_effects) std::cout << " " << e;
+    std::cout << "\n";
+  }
+  std::cout << std::setw(8) << "t [s]";
+  for (const auto& p : est_sys.params())
+    std::cout << std::setw(26) << (p.name + " [" + p.unit + "]");
+  std::cout << "\n" << std::setprecision(5);
+}
+
+// One row of the table: the estimate +- 1 sigma at time t.
+void PrintRow(const OnlineCalibrator& cal, double t) {
+  const auto p = cal.params();
+  const auto C = cal.params_covariance();
+  std::cout << std::setw(8) << std::fixed << std::setprecision(1) << t << std::defaultfloat
+            << std::setprecision(5);
+  for (int i = 0; i < cal.system().num_params(); ++i) {
+    std::ostringstream cell;
+    cell << std::setprecision(5) << p[i] << " +- " << std::setprecision(2) << std::sqrt(C(i, i));
+    std::cout << std::setw(26) << cell.str();
+  }
+  std::cout << "\n";
+}
+
+// The truth under the table, and how many parameters ended within 3 sigma of it.
+void PrintTruth(const OnlineCalibrator& cal, const std::function<double(int)>& truth_of) {
+  const int np = cal.system().num_params();
+  std::cout << std::setw(8) << "truth";
+  for (int i = 0; i < np; ++i) std::cout << std::setw(26) << truth_of(i);
+  std::cout << "\n";
+  int inside = 0;
+  const auto p = cal.params();
+  const auto C = cal.params_covariance();
+  for (int i = 0; i < np; ++i) {
+    if (std::abs(p[i] - truth_of(i)) <= 3.0 * std::sqrt(C(i, i))) ++inside;
+  }
+  std::cout << inside << "/" << np << " parameters within 3 sigma of the truth\n";
+}
+
+}  // namespace
 
 Command AddSimulate(CLI::App& app) {
   struct Args {
@@ -54,58 +166,18 @@ Command AddSimulate(CLI::App& app) {
     }
     const VecN<kMaxState> p_true = ParamsFrom(truth_sys, sc.truth, args->config + ": truth");
     const VecN<kMaxState> p_guess = ParamsFrom(est_sys, sc.guess, args->config + ": guess");
+    const SimulatedRun run = SimulateScenario(sc, truth_sys, p_true, args->config);
+    const auto& meas = run.meas;
+    if (!args->export_dir.empty()) ExportRecording(args->export_dir, truth_sys, run);
 
-    std::mt19937_64 rng(sc.seed);
-    const TimeNs t1 = SecondsToNs(sc.duration_s);
-    ControlSignal cmd(nc, 0);
-    if (sc.profile == "smooth") {
-      AppendSmoothRandom(&cmd, 0, t1, sc.control_low, sc.control_high, sc.min_period_s,
-                         sc.control_rate_hz, rng);
-    } else if (sc.profile == "piecewise") {
-      AppendPiecewiseRandom(&cmd, 0, t1, sc.control_low, sc.control_high, sc.min_period_s,
-                            3.0 * sc.min_period_s, rng);
-    } else {
-      throw std::runtime_error(args->config + ": controls.profile must be smooth or piecewise");
-    }
-    const auto times = FrameTimes(0, t1, sc.camera, rng);
-    const StateVec x0 = truth_sys.MakeState(0.0, 0.0, 0.0, p_true, cmd, 0.0);
-    const auto traj = SimulateTruth(truth_sys, x0, cmd, times);
-    const Eigen::Matrix3d R = sc.pose_sigma.array().square().matrix().asDiagonal();
-    const auto meas = MeasurePoses(traj, R, 0, rng);
-
-    if (!args->export_dir.empty()) {
-      std::filesystem::create_directories(args->export_dir);
-      std::ostringstream c, p;
-      c << "t";
-      for (const auto& ch : truth_sys.model().controls()) c << "," << ch.name;
-      c << "\n" << std::setprecision(10);
-      for (size_t i = 0; i < cmd.size(); ++i) {
-        c << cmd.TimeAt(static_cast<int>(i));
-        for (int k = 0; k < nc; ++k)
-          c << "," << cmd.ValuesAt(static_cast<int>(i))[static_cast<size_t>(k)];
-        c << "\n";
-      }
-      p << "t,x,y,theta\n" << std::setprecision(10);
-      for (const auto& m : meas)
-        p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
-      WriteOutput(args->export_dir + "/controls.csv", c.str(), "controls CSV");
-      WriteOutput(args->export_dir + "/poses.csv", p.str(), "poses CSV");
-      std::cout << "wrote " << args->export_dir << "/controls.csv and poses.csv\n";
-    }
     OnlineCalibratorOptions opt;
     opt.filter = sc.filter;
     opt.noise.control_psd = sc.control_psd;
     OnlineCalibrator cal(est_sys, opt, 0);
-    cal.controls() = cmd;
+    cal.controls() = run.cmd;
     const int np = est_sys.num_params();
-    StateMat P0 = StateMat::Zero(np, np);
-    for (int i = 0; i < np; ++i) {
-      const double s =
-          sc.guess_sigma_fraction *
-          std::max(std::abs(p_guess[i]), est_sys.params()[static_cast<size_t>(i)].default_sigma);
-      P0(i, i) = s * s;
-    }
-    cal.Initialize(meas.front().t_ns, meas.front().z, R, p_guess, P0);
+    cal.Initialize(meas.front().t_ns, meas.front().z, run.R, p_guess,
+                   GuessCovariance(est_sys, p_guess, sc.guess_sigma_fraction));
 
     std::ostringstream csv;  // written whole at the end
     const bool want_csv = !args->csv.empty();
@@ -114,32 +186,8 @@ Command AddSimulate(CLI::App& app) {
       const int j = truth_sys.ParamIndex(est_sys.params()[static_cast<size_t>(i)].name);
       return j < 0 ? NAN : p_true[j];
     };
-    std::cout << "Simulated " << sc.model << " (" << sc.profile << " controls, " << sc.duration_s
-              << " s, " << meas.size() << " poses at " << sc.camera.rate_hz << " Hz), filter "
-              << sc.filter << ", seed " << sc.seed << "\n";
-    if (!sc.hidden_effects.empty()) {
-      std::cout << "hidden effects (not modelled by the estimator):";
-      for (const auto& e : sc.hidden_effects) std::cout << " " << e;
-      std::cout << "\n";
-    }
-    std::cout << std::setw(8) << "t [s]";
-    for (const auto& p : est_sys.params())
-      std::cout << std::setw(26) << (p.name + " [" + p.unit + "]");
-    std::cout << "\n" << std::setprecision(5);
+    PrintHeader(sc, est_sys, meas.size());
     double next_report = 0.0;
-    auto report = [&](double t) {
-      const auto p = cal.params();
-      const auto C = cal.params_covariance();
-      std::cout << std::setw(8) << std::fixed << std::setprecision(1) << t << std::defaultfloat
-                << std::setprecision(5);
-      for (int i = 0; i < np; ++i) {
-        std::ostringstream cell;
-        cell << std::setprecision(5) << p[i] << " +- " << std::setprecision(2)
-             << std::sqrt(C(i, i));
-        std::cout << std::setw(26) << cell.str();
-      }
-      std::cout << "\n";
-    };
     for (size_t k = 1; k < meas.size(); ++k) {
       cal.AddPose(meas[k].t_ns, meas[k].z, meas[k].R);
       const double t = NsToSeconds(meas[k].t_ns);
@@ -152,21 +200,12 @@ Command AddSimulate(CLI::App& app) {
         }
       }
       if (t >= next_report) {
-        report(t);
+        PrintRow(cal, t);
         next_report += sc.report_every_s;
       }
     }
-    report(NsToSeconds(meas.back().t_ns));
-    std::cout << std::setw(8) << "truth";
-    for (int i = 0; i < np; ++i) std::cout << std::setw(26) << truth_of(i);
-    std::cout << "\n";
-    int inside = 0;
-    const auto p = cal.params();
-    const auto C = cal.params_covariance();
-    for (int i = 0; i < np; ++i) {
-      if (std::abs(p[i] - truth_of(i)) <= 3.0 * std::sqrt(C(i, i))) ++inside;
-    }
-    std::cout << inside << "/" << np << " parameters within 3 sigma of the truth\n";
+    PrintRow(cal, NsToSeconds(meas.back().t_ns));
+    PrintTruth(cal, truth_of);
     if (want_csv) WriteOutput(args->csv, csv.str(), "convergence CSV");
     return 0;
   };

@@ -193,6 +193,55 @@ std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidate
   return out;
 }
 
+// The model and the effects already in it (o.base_effects); an error names the spec.
+void MakeBaseModel(const AnalyzeOptions& o, std::shared_ptr<const KinematicModel>* model,
+                   std::vector<std::shared_ptr<const Effect>>* base_effects) {
+  if (const Status s = MakeModel(o.model, model); !s.ok()) throw AnalysisError(s.message());
+  for (const auto& spec_text : o.base_effects) {
+    EffectSpec spec;
+    std::unique_ptr<Effect> e;
+    Status st = ParseEffectSpec(spec_text, &spec);
+    if (st.ok()) st = MakeEffect(spec, **model, &e);
+    if (!st.ok()) throw AnalysisError("base effects: " + st.message());
+    base_effects->push_back(std::move(e));
+  }
+  if (const Status st = System::CheckCombination(**model, *base_effects, {}); !st.ok()) {
+    throw AnalysisError("base effects: " + st.message());
+  }
+}
+
+// The rounds of the selection from *current (the baseline): each screens every candidate on
+// top of what was accepted, then confirms the leading ones on all windows; the winner of a
+// round becomes *current. Returns the effects in the model at the end (base ones first).
+std::vector<std::string> SelectEffects(const Dataset& d,
+                                       const std::shared_ptr<const KinematicModel>& model,
+                                       double command_lag, const AnalyzeOptions& o,
+                                       SelectionState* current, AnalyzeResult* res) {
+  std::vector<std::string> accepted = o.base_effects;
+  const auto candidates = analysis::Candidates(*model, o);
+  for (int round = 1; round <= o.max_effects && !candidates.empty(); ++round) {
+    if (o.progress)
+      o.progress(SelectionProgress(round, o.max_effects), "round " + std::to_string(round));
+    std::map<std::string, Eigen::VectorXd> warm;
+    std::vector<Tried> tried = RunRound(round, candidates, accepted, *current, d, model,
+                                        command_lag, o, &res->trials, &warm);
+    for (auto& [spec, p] : warm) current->warm[spec] = std::move(p);
+    Tried* winner = Winner(&tried, o.min_gain);
+    for (auto& t : tried) {
+      if (&t == winner) t.trial.accepted = true;
+      res->trials.push_back(t.trial);
+    }
+    if (winner == nullptr) break;
+    accepted.push_back(winner->trial.name);
+    current->effects = winner->effects;
+    current->fit = winner->fit;
+    current->eval = winner->eval;
+    current->diagnosis = Diagnose(current->eval.points, d.features, d.horizon);
+    res->residual_steps.push_back({"+" + winner->trial.name, current->eval.points});
+  }
+  return accepted;
+}
+
 }  // namespace
 
 AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
@@ -208,19 +257,8 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
     if (o.progress) o.progress(f, s);
   };
   std::shared_ptr<const KinematicModel> model;
-  if (const Status s = MakeModel(o.model, &model); !s.ok()) throw AnalysisError(s.message());
   std::vector<std::shared_ptr<const Effect>> base_effects;
-  for (const auto& spec_text : o.base_effects) {
-    EffectSpec spec;
-    std::unique_ptr<Effect> e;
-    Status st = ParseEffectSpec(spec_text, &spec);
-    if (st.ok()) st = MakeEffect(spec, *model, &e);
-    if (!st.ok()) throw AnalysisError("base effects: " + st.message());
-    base_effects.push_back(std::move(e));
-  }
-  if (const Status st = System::CheckCombination(*model, base_effects, {}); !st.ok()) {
-    throw AnalysisError("base effects: " + st.message());
-  }
+  MakeBaseModel(o, &model, &base_effects);
   const System bare(model, base_effects);  // the model as it stands (bare unless base effects)
   const Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
   Dataset d = analysis::Prepare(rec, o, &res.warnings);
@@ -255,27 +293,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
 
   // 2. Selection: each round screens every candidate on top of what was accepted, then
   // confirms the leading ones on all windows.
-  std::vector<std::string> accepted = o.base_effects;
-  const auto candidates = analysis::Candidates(*model, o);
-  for (int round = 1; round <= o.max_effects && !candidates.empty(); ++round) {
-    progress(SelectionProgress(round, o.max_effects), "round " + std::to_string(round));
-    std::map<std::string, Eigen::VectorXd> warm;
-    std::vector<Tried> tried = RunRound(round, candidates, accepted, current, d, model, command_lag,
-                                        o, &res.trials, &warm);
-    for (auto& [spec, p] : warm) current.warm[spec] = std::move(p);
-    Tried* winner = Winner(&tried, o.min_gain);
-    for (auto& t : tried) {
-      if (&t == winner) t.trial.accepted = true;
-      res.trials.push_back(t.trial);
-    }
-    if (winner == nullptr) break;
-    accepted.push_back(winner->trial.name);
-    current.effects = winner->effects;
-    current.fit = winner->fit;
-    current.eval = winner->eval;
-    current.diagnosis = Diagnose(current.eval.points, d.features, d.horizon);
-    res.residual_steps.push_back({"+" + winner->trial.name, current.eval.points});
-  }
+  const std::vector<std::string> accepted = SelectEffects(d, model, command_lag, o, &current, &res);
   progress(0.95, "report");
   const System final_sys(model, current.effects);
   res.after = analysis::MakeReport(final_sys, current.fit, current.eval, accepted, fit_windows);

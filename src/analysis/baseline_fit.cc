@@ -92,14 +92,15 @@ Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, dou
   return p;
 }
 
-// Multi-start, staged fit of the bare model: short windows from many starts, then the best
-// refined on full windows. Reports when distinct optima fit equally well.
-Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
-                const AnalyzeOptions& o, FitReport* report) {
-  const auto& u = d.rec->controls;
+namespace {
+
+// The starts of the multi-start: the guess, each parameter scaled (or shifted by its
+// default sigma when it is not a scale) by 0.2, 0.5, 2 and 5, and six random mixes.
+std::vector<Eigen::VectorXd> BaselineStarts(const System& sys, const Eigen::VectorXd& p0,
+                                            uint64_t seed) {
   const int np = sys.num_params();
   std::vector<Eigen::VectorXd> starts = {p0};
-  std::mt19937_64 rng(o.seed);
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   std::normal_distribution<double> gauss(0.0, 1.0);
   auto is_scale = [&](int i) {
@@ -128,23 +129,11 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     }
     starts.push_back(s);
   }
-  // The starts in parallel, each solve on one thread: the result does not depend on the
-  // thread count.
-  if (o.progress) o.progress(0.05, "baseline: multi-start");
-  std::vector<Fit> fits(starts.size());
-  ParallelFor(starts.size(), o.num_threads,
-              [&](size_t k) { fits[k] = RunFit(sys, u, d.short_meas, starts[k], false, 1, 40); });
-  std::vector<Fit> stage1;
-  for (auto& f : fits) {
-    if (f.ok) stage1.push_back(std::move(f));
-  }
-  if (stage1.empty())
-    throw AnalysisError(
-        "baseline fit failed from every start: check that the controls drive the model (units, "
-        "column order)");
-  std::sort(stage1.begin(), stage1.end(),
-            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
-  // Refine the best few distinct optima on the full windows (in parallel).
+  return starts;
+}
+
+// The best few distinct optima of the short-window fits (sorted by cost) worth refining.
+std::vector<const Fit*> DistinctSeeds(const std::vector<Fit>& stage1) {
   std::vector<const Fit*> seeds;
   for (size_t k = 0; k < stage1.size() && seeds.size() < 3; ++k) {
     bool distinct = true;
@@ -156,17 +145,14 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     if (stage1[k].cost > 1.5 * stage1[0].cost + 10.0) break;
     seeds.push_back(&stage1[k]);
   }
-  std::vector<Fit> tops(seeds.size());
-  ParallelFor(seeds.size(), o.num_threads,
-              [&](size_t k) { tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, true, 1); });
-  std::vector<Fit> refined;
-  for (auto& f : tops) {
-    if (f.ok) refined.push_back(std::move(f));
-  }
-  if (refined.empty()) throw AnalysisError("baseline refinement failed");
-  std::sort(refined.begin(), refined.end(),
-            [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
-  Fit best = refined.front();
+  return seeds;
+}
+
+// Says in *report when another refined optimum fits as well as the best but differs from it
+// by more than 5 sigma in a parameter.
+void CheckUnique(const System& sys, const std::vector<Fit>& refined, FitReport* report) {
+  const Fit& best = refined.front();
+  const int np = sys.num_params();
   report->unique = true;
   for (size_t k = 1; k < refined.size(); ++k) {
     const Fit& alt = refined[k];
@@ -185,7 +171,46 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
       report->uniqueness = m.str();
     }
   }
-  return best;
+}
+
+// The fits that succeeded, cheapest first.
+std::vector<Fit> OkByCost(std::vector<Fit> fits) {
+  std::vector<Fit> ok;
+  for (auto& f : fits) {
+    if (f.ok) ok.push_back(std::move(f));
+  }
+  std::sort(ok.begin(), ok.end(), [](const Fit& a, const Fit& b) { return a.cost < b.cost; });
+  return ok;
+}
+
+}  // namespace
+
+// Multi-start, staged fit of the bare model: short windows from many starts, then the best
+// refined on full windows. Reports when distinct optima fit equally well.
+Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
+                const AnalyzeOptions& o, FitReport* report) {
+  const auto& u = d.rec->controls;
+  const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, o.seed);
+  // The starts in parallel, each solve on one thread: the result does not depend on the
+  // thread count.
+  if (o.progress) o.progress(0.05, "baseline: multi-start");
+  std::vector<Fit> fits(starts.size());
+  ParallelFor(starts.size(), o.num_threads,
+              [&](size_t k) { fits[k] = RunFit(sys, u, d.short_meas, starts[k], false, 1, 40); });
+  const std::vector<Fit> stage1 = OkByCost(std::move(fits));
+  if (stage1.empty())
+    throw AnalysisError(
+        "baseline fit failed from every start: check that the controls drive the model (units, "
+        "column order)");
+  // Refine the best few distinct optima on the full windows (in parallel).
+  const std::vector<const Fit*> seeds = DistinctSeeds(stage1);
+  std::vector<Fit> tops(seeds.size());
+  ParallelFor(seeds.size(), o.num_threads,
+              [&](size_t k) { tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, true, 1); });
+  const std::vector<Fit> refined = OkByCost(std::move(tops));
+  if (refined.empty()) throw AnalysisError("baseline refinement failed");
+  CheckUnique(sys, refined, report);
+  return refined.front();
 }
 
 }  // namespace kincal::analysis

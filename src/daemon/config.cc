@@ -136,6 +136,178 @@ class Section {
   std::set<std::string> known_;
 };
 
+// The sections of a config file, one loader each (LoadDaemonConfig calls them in order).
+void LoadLcm(Section s, DaemonConfig& c) {
+  s.Get("url", &c.lcm.url);
+  s.Get("controls_channel", &c.lcm.controls_channel);
+  s.Get("pose_channel", &c.lcm.pose_channel);
+  s.Get("params_channel", &c.lcm.params_channel);
+  s.Get("health_channel", &c.lcm.health_channel);
+  s.Get("model_check_channel", &c.lcm.model_check_channel);
+  s.Get("guidance_channel", &c.lcm.guidance_channel);
+  s.Get("calibration_channel", &c.lcm.calibration_channel);
+  s.Get("markers_channel", &c.lcm.markers_channel);
+  s.Get("frame_channel", &c.lcm.frame_channel);
+  s.Get("publish_frames", &c.lcm.publish_frames);
+  s.Get("publish_markers", &c.lcm.publish_markers);
+  s.CheckUnknown();
+}
+
+void LoadV4l2(Section s, DaemonConfig& c) {
+  s.Get("device", &c.v4l2.device);
+  s.Get("width", &c.v4l2.width);
+  s.Get("height", &c.v4l2.height);
+  s.Choice("pixel_format", &c.v4l2.pixel_format, kCameraFormatNames);
+  s.Get("fps", &c.v4l2.fps);
+  s.Get("buffers", &c.v4l2.buffers);
+  s.Get("controls", &c.v4l2.controls);
+  s.CheckUnknown();
+}
+
+void LoadLibcamera(Section s, DaemonConfig& c) {
+  s.Get("camera", &c.libcamera.camera);
+  s.Get("width", &c.libcamera.width);
+  s.Get("height", &c.libcamera.height);
+  s.Choice("pixel_format", &c.libcamera.pixel_format, kCameraFormatNames);
+  s.Get("buffers", &c.libcamera.buffers);
+  s.Get("fps", &c.libcamera.fps);
+  s.CheckUnknown();
+}
+
+void LoadSim(Section s, DaemonConfig& c, const std::string& dir) {
+  s.Path("scenario", &c.sim.scenario, dir);
+  s.Get("speed", &c.sim.speed);
+  s.Get("duration_s", &c.sim.duration_s);
+  s.Get("margin_px", &c.sim.margin_px);
+  s.Get("carry_s", &c.sim.carry_s);
+  s.Get("chunk_s", &c.sim.chunk_s);
+  s.Get("noise_grey", &c.sim.noise_grey);
+  s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
+  s.Get("controls_channel", &c.sim.controls_channel);
+  s.Get("reflection_prob", &c.sim.reflection_prob);
+  s.Get("occlusion_prob", &c.sim.occlusion_prob);
+  s.Get("seed", &c.sim.seed);
+  s.CheckUnknown();
+}
+
+void LoadReplay(Section s, DaemonConfig& c, const std::string& dir) {
+  s.Path("path", &c.replay.path, dir);
+  s.Get("speed", &c.replay.speed);
+  s.Get("loops", &c.replay.loops);
+  s.CheckUnknown();
+}
+
+void LoadCamera(Section s, DaemonConfig& c, const std::string& dir) {
+  s.Path("intrinsics", &c.camera.intrinsics, dir);
+  s.Path("floor", &c.camera.floor, dir);
+  s.Get("nadir_height_m", &c.camera.nadir_height_m);
+  s.CheckUnknown();
+}
+
+void LoadTarget(Section s, DaemonConfig& c, const std::string& dir) {
+  s.Path("layout", &c.target.layout, dir);
+  s.Get("height_m", &c.target.height_m);
+  s.CheckUnknown();
+}
+
+void LoadDetector(Section s, DaemonConfig& c) {
+  s.Get("dark_on_light", &c.detector.dark_on_light);
+  s.Get("threshold", &c.detector.threshold);
+  s.Get("min_area_px", &c.detector.min_area_px);
+  s.Get("max_area_px", &c.detector.max_area_px);
+  s.Get("min_circularity", &c.detector.min_circularity);
+  s.Get("min_fill", &c.detector.min_fill);
+  s.Get("min_contrast", &c.detector.min_contrast);
+  s.Get("flatten_background", &c.detector.flatten_background);
+  s.Get("background_tile_px", &c.detector.background_tile_px);
+  s.CheckUnknown();
+}
+
+void LoadPose(Section s, DaemonConfig& c) {
+  s.Choice("method", &c.pose.method, kPoseMethodNames);
+  s.Get("sigma_px", &c.pose.sigma_px);
+  s.Get("max_rms_px", &c.pose.max_rms_px);
+  s.CheckUnknown();
+}
+
+void LoadRobot(Section s, DaemonConfig& c) {
+  s.Get("model", &c.robot.model);
+  s.Effects("effects", &c.robot.effects, &c.robot.auto_effects);
+  s.Get("guess", &c.robot.guess);
+  s.Get("guess_sigma_fraction", &c.robot.guess_sigma_fraction);
+  s.Choice("control_stamp", &c.robot.control_stamp, kControlStampNames);
+  s.Get("max_control_delay_s", &c.robot.max_control_delay_s);
+  s.CheckUnknown();
+}
+
+void LoadFilter(Section s, DaemonConfig& c, const std::string& path) {
+  s.Get("type", &c.filter.type);
+  s.Get("control_psd", &c.filter.control_psd);
+  std::vector<double> psd;
+  s.Get("pose_psd", &psd);
+  if (!psd.empty()) {
+    if (psd.size() != kPoseDim)
+      throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
+    c.filter.pose_psd = {psd[0], psd[1], psd[2]};
+  }
+  s.Get("max_pose_gap_s", &c.filter.max_pose_gap_s);
+  s.Get("params_rate_hz", &c.filter.params_rate_hz);
+  s.Get("control_history_s", &c.filter.control_history_s);
+  s.Get("gate_nis", &c.filter.gate_nis);
+  s.Get("divergence_gated", &c.filter.divergence_gated);
+  s.Get("batch_window_s", &c.filter.batch_window_s);
+  s.Get("adaptive_noise", &c.filter.adaptive_noise);
+  s.CheckUnknown();
+}
+
+void LoadQueues(Section s, DaemonConfig& c) {
+  s.Get("frames", &c.queues.frames);
+  s.Get("poses", &c.queues.poses);
+  s.Get("controls", &c.queues.controls);
+  s.Get("recorder", &c.queues.recorder);
+  s.CheckUnknown();
+}
+
+void LoadRecord(Section s, DaemonConfig& c) {
+  s.Get("path", &c.record.path);
+  s.Choice("frame_encoding", &c.record.frame_encoding, kFrameEncodingNames);
+  s.Get("flush_every_s", &c.record.flush_every_s);
+  s.CheckUnknown();
+}
+
+void LoadCheckpoint(Section s, DaemonConfig& c) {
+  s.Get("path", &c.checkpoint.path);
+  s.Get("every_s", &c.checkpoint.every_s);
+  s.Get("resume", &c.checkpoint.resume);
+  s.CheckUnknown();
+}
+
+void LoadCalibration(Section s, DaemonConfig& c) {
+  s.Get("enabled", &c.calibration.enabled);
+  s.Get("every_s", &c.calibration.every_s);
+  s.Get("first_s", &c.calibration.first_s);
+  s.Get("growth", &c.calibration.growth);
+  s.Get("threads", &c.calibration.threads);
+  s.Get("max_effects", &c.calibration.max_effects);
+  s.Get("max_poses", &c.calibration.max_poses);
+  s.Get("max_controls", &c.calibration.max_controls);
+  s.Get("block_s", &c.calibration.block_s);
+  s.CheckUnknown();
+}
+
+void LoadGuidance(Section s, DaemonConfig& c) {
+  s.Get("enabled", &c.guidance.enabled);
+  s.Get("every_s", &c.guidance.every_s);
+  s.Get("horizon_s", &c.guidance.horizon_s);
+  s.Get("limits", &c.guidance.limits);
+  s.Get("targets", &c.guidance.targets);
+  s.Get("pose_sigma", &c.guidance.pose_sigma);
+  s.Get("pose_rate_hz", &c.guidance.pose_rate_hz);
+  s.Get("drive", &c.guidance.drive);
+  s.Get("drive_pause_s", &c.guidance.drive_pause_s);
+  s.CheckUnknown();
+}
+
 }  // namespace
 
 StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path) {
@@ -163,177 +335,22 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   top.Choice("source", &c.source, kSourceNames);
   top.Get("health_rate_hz", &c.health_rate_hz);
   top.Get("no_target_warn_s", &c.no_target_warn_s);
-  {
-    auto s = top.Sub("lcm");
-    s.Get("url", &c.lcm.url);
-    s.Get("controls_channel", &c.lcm.controls_channel);
-    s.Get("pose_channel", &c.lcm.pose_channel);
-    s.Get("params_channel", &c.lcm.params_channel);
-    s.Get("health_channel", &c.lcm.health_channel);
-    s.Get("model_check_channel", &c.lcm.model_check_channel);
-    s.Get("guidance_channel", &c.lcm.guidance_channel);
-    s.Get("calibration_channel", &c.lcm.calibration_channel);
-    s.Get("markers_channel", &c.lcm.markers_channel);
-    s.Get("frame_channel", &c.lcm.frame_channel);
-    s.Get("publish_frames", &c.lcm.publish_frames);
-    s.Get("publish_markers", &c.lcm.publish_markers);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("v4l2");
-    s.Get("device", &c.v4l2.device);
-    s.Get("width", &c.v4l2.width);
-    s.Get("height", &c.v4l2.height);
-    s.Choice("pixel_format", &c.v4l2.pixel_format, kCameraFormatNames);
-    s.Get("fps", &c.v4l2.fps);
-    s.Get("buffers", &c.v4l2.buffers);
-    s.Get("controls", &c.v4l2.controls);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("libcamera");
-    s.Get("camera", &c.libcamera.camera);
-    s.Get("width", &c.libcamera.width);
-    s.Get("height", &c.libcamera.height);
-    s.Choice("pixel_format", &c.libcamera.pixel_format, kCameraFormatNames);
-    s.Get("buffers", &c.libcamera.buffers);
-    s.Get("fps", &c.libcamera.fps);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("sim");
-    s.Path("scenario", &c.sim.scenario, dir);
-    s.Get("speed", &c.sim.speed);
-    s.Get("duration_s", &c.sim.duration_s);
-    s.Get("margin_px", &c.sim.margin_px);
-    s.Get("carry_s", &c.sim.carry_s);
-    s.Get("chunk_s", &c.sim.chunk_s);
-    s.Get("noise_grey", &c.sim.noise_grey);
-    s.Get("controls_via_lcm", &c.sim.controls_via_lcm);
-    s.Get("controls_channel", &c.sim.controls_channel);
-    s.Get("reflection_prob", &c.sim.reflection_prob);
-    s.Get("occlusion_prob", &c.sim.occlusion_prob);
-    s.Get("seed", &c.sim.seed);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("replay");
-    s.Path("path", &c.replay.path, dir);
-    s.Get("speed", &c.replay.speed);
-    s.Get("loops", &c.replay.loops);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("camera");
-    s.Path("intrinsics", &c.camera.intrinsics, dir);
-    s.Path("floor", &c.camera.floor, dir);
-    s.Get("nadir_height_m", &c.camera.nadir_height_m);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("target");
-    s.Path("layout", &c.target.layout, dir);
-    s.Get("height_m", &c.target.height_m);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("detector");
-    s.Get("dark_on_light", &c.detector.dark_on_light);
-    s.Get("threshold", &c.detector.threshold);
-    s.Get("min_area_px", &c.detector.min_area_px);
-    s.Get("max_area_px", &c.detector.max_area_px);
-    s.Get("min_circularity", &c.detector.min_circularity);
-    s.Get("min_fill", &c.detector.min_fill);
-    s.Get("min_contrast", &c.detector.min_contrast);
-    s.Get("flatten_background", &c.detector.flatten_background);
-    s.Get("background_tile_px", &c.detector.background_tile_px);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("pose");
-    s.Choice("method", &c.pose.method, kPoseMethodNames);
-    s.Get("sigma_px", &c.pose.sigma_px);
-    s.Get("max_rms_px", &c.pose.max_rms_px);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("robot");
-    s.Get("model", &c.robot.model);
-    s.Effects("effects", &c.robot.effects, &c.robot.auto_effects);
-    s.Get("guess", &c.robot.guess);
-    s.Get("guess_sigma_fraction", &c.robot.guess_sigma_fraction);
-    s.Choice("control_stamp", &c.robot.control_stamp, kControlStampNames);
-    s.Get("max_control_delay_s", &c.robot.max_control_delay_s);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("filter");
-    s.Get("type", &c.filter.type);
-    s.Get("control_psd", &c.filter.control_psd);
-    std::vector<double> psd;
-    s.Get("pose_psd", &psd);
-    if (!psd.empty()) {
-      if (psd.size() != kPoseDim)
-        throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
-      c.filter.pose_psd = {psd[0], psd[1], psd[2]};
-    }
-    s.Get("max_pose_gap_s", &c.filter.max_pose_gap_s);
-    s.Get("params_rate_hz", &c.filter.params_rate_hz);
-    s.Get("control_history_s", &c.filter.control_history_s);
-    s.Get("gate_nis", &c.filter.gate_nis);
-    s.Get("divergence_gated", &c.filter.divergence_gated);
-    s.Get("batch_window_s", &c.filter.batch_window_s);
-    s.Get("adaptive_noise", &c.filter.adaptive_noise);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("queues");
-    s.Get("frames", &c.queues.frames);
-    s.Get("poses", &c.queues.poses);
-    s.Get("controls", &c.queues.controls);
-    s.Get("recorder", &c.queues.recorder);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("record");
-    s.Get("path", &c.record.path);
-    s.Choice("frame_encoding", &c.record.frame_encoding, kFrameEncodingNames);
-    s.Get("flush_every_s", &c.record.flush_every_s);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("checkpoint");
-    s.Get("path", &c.checkpoint.path);
-    s.Get("every_s", &c.checkpoint.every_s);
-    s.Get("resume", &c.checkpoint.resume);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("calibration");
-    s.Get("enabled", &c.calibration.enabled);
-    s.Get("every_s", &c.calibration.every_s);
-    s.Get("first_s", &c.calibration.first_s);
-    s.Get("growth", &c.calibration.growth);
-    s.Get("threads", &c.calibration.threads);
-    s.Get("max_effects", &c.calibration.max_effects);
-    s.Get("max_poses", &c.calibration.max_poses);
-    s.Get("max_controls", &c.calibration.max_controls);
-    s.Get("block_s", &c.calibration.block_s);
-    s.CheckUnknown();
-  }
-  {
-    auto s = top.Sub("guidance");
-    s.Get("enabled", &c.guidance.enabled);
-    s.Get("every_s", &c.guidance.every_s);
-    s.Get("horizon_s", &c.guidance.horizon_s);
-    s.Get("limits", &c.guidance.limits);
-    s.Get("targets", &c.guidance.targets);
-    s.Get("pose_sigma", &c.guidance.pose_sigma);
-    s.Get("pose_rate_hz", &c.guidance.pose_rate_hz);
-    s.Get("drive", &c.guidance.drive);
-    s.Get("drive_pause_s", &c.guidance.drive_pause_s);
-    s.CheckUnknown();
-  }
+  LoadLcm(top.Sub("lcm"), c);
+  LoadV4l2(top.Sub("v4l2"), c);
+  LoadLibcamera(top.Sub("libcamera"), c);
+  LoadSim(top.Sub("sim"), c, dir);
+  LoadReplay(top.Sub("replay"), c, dir);
+  LoadCamera(top.Sub("camera"), c, dir);
+  LoadTarget(top.Sub("target"), c, dir);
+  LoadDetector(top.Sub("detector"), c);
+  LoadPose(top.Sub("pose"), c);
+  LoadRobot(top.Sub("robot"), c);
+  LoadFilter(top.Sub("filter"), c, path);
+  LoadQueues(top.Sub("queues"), c);
+  LoadRecord(top.Sub("record"), c);
+  LoadCheckpoint(top.Sub("checkpoint"), c);
+  LoadCalibration(top.Sub("calibration"), c);
+  LoadGuidance(top.Sub("guidance"), c);
   top.CheckUnknown();
   return c;
 }

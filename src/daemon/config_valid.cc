@@ -210,51 +210,71 @@ bool GuidanceOptions::IsValid(std::string* error) const {
   return true;
 }
 
-bool DaemonConfig::IsValid(std::string* error) const {
-  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
-      !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
-    return false;
-  }
-  switch (source) {
+namespace {
+
+// DaemonConfig::IsValid by part: the source, the camera and the target, the estimator.
+bool ValidSource(const DaemonConfig& c, std::string* error) {
+  switch (c.source) {
     case SourceKind::kV4l2:
-      if (!v4l2.IsValid(error)) return false;
+      if (!c.v4l2.IsValid(error)) return false;
       break;
     case SourceKind::kLibcamera:
-      if (!libcamera.IsValid(error)) return false;
+      if (!c.libcamera.IsValid(error)) return false;
       break;
     case SourceKind::kSim:
-      if (!sim.IsValid(error)) return false;
+      if (!c.sim.IsValid(error)) return false;
       break;
     case SourceKind::kReplay:
-      if (!replay.IsValid(error)) return false;
+      if (!c.replay.IsValid(error)) return false;
       break;
   }
-  if (source == SourceKind::kSim && sim.controls_via_lcm && sim.speed != 1.0 &&
-      robot.control_stamp != ControlStamp::kSender) {
+  if (c.source == SourceKind::kSim && c.sim.controls_via_lcm && c.sim.speed != 1.0 &&
+      c.robot.control_stamp != ControlStamp::kSender) {
     *error =
         "sim.controls_via_lcm at sim.speed != 1: receive stamps are wall-clock times, the "
         "simulation's are not; set robot.control_stamp: sender";
     return false;
   }
-  if (!camera.IsValid(error) || !target.IsValid(error)) return false;
-  if (!Expect(target.height_m < camera.nadir_height_m || !camera.floor.empty(),
+  return true;
+}
+
+bool ValidVision(const DaemonConfig& c, std::string* error) {
+  if (!c.camera.IsValid(error) || !c.target.IsValid(error)) return false;
+  if (!Expect(c.target.height_m < c.camera.nadir_height_m || !c.camera.floor.empty(),
               "target.height_m must be >= 0 and below the camera", error)) {
     return false;
   }
   std::string detector_error;
-  if (!detector.IsValid(&detector_error)) {
+  if (!c.detector.IsValid(&detector_error)) {
     *error = "detector: " + detector_error;
     return false;
   }
-  if (!pose.IsValid(error) || !robot.IsValid(error) || !filter.IsValid(error)) return false;
-  if (!filter.control_psd.empty()) {
-    const int controls = MakeModel(robot.model)->num_controls();  // robot.IsValid: it exists
-    if (!Expect(static_cast<int>(filter.control_psd.size()) == controls,
+  return c.pose.IsValid(error);
+}
+
+bool ValidEstimator(const DaemonConfig& c, std::string* error) {
+  if (!c.robot.IsValid(error) || !c.filter.IsValid(error)) return false;
+  if (!c.filter.control_psd.empty()) {
+    const int controls = MakeModel(c.robot.model)->num_controls();  // robot.IsValid: it exists
+    if (!Expect(static_cast<int>(c.filter.control_psd.size()) == controls,
                 "filter.control_psd needs " + std::to_string(controls) + " values for model " +
-                    robot.model,
+                    c.robot.model,
                 error)) {
       return false;
     }
+  }
+  return true;
+}
+
+}  // namespace
+
+bool DaemonConfig::IsValid(std::string* error) const {
+  if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
+      !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
+    return false;
+  }
+  if (!ValidSource(*this, error) || !ValidVision(*this, error) || !ValidEstimator(*this, error)) {
+    return false;
   }
   if (!queues.IsValid(error) || !record.IsValid(error) || !checkpoint.IsValid(error) ||
       !calibration.IsValid(error) || !guidance.IsValid(error)) {

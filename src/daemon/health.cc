@@ -18,6 +18,63 @@ class Problems {
   std::string text_;
 };
 
+// What went wrong in the pipeline since the last message: the source, frames, queues, log.
+void PipelineProblems(const DaemonCounters& now, const DaemonCounters& prev, const HealthStatus& s,
+                      Problems* p) {
+  if (!s.source_error.empty()) p->Add("source: " + s.source_error);
+  if (now.frames_bad > prev.frames_bad) {
+    // A frame the detector could not use says why; events the source itself could not
+    // decode (a damaged or foreign log) have no frame to speak of.
+    p->Add("bad frames: " + (s.last_frame_error.empty()
+                                 ? std::to_string(now.frames_bad - prev.frames_bad) +
+                                       " the source could not decode (damaged or foreign data)"
+                                 : s.last_frame_error));
+  }
+  if (!s.source_done && s.since_last_frame_ns > HealthReporter::kNoFramesNs)
+    p->Add("no frames for 2 s");
+  if (now.frames_dropped_queue > prev.frames_dropped_queue) {
+    p->Add("frame queue full: detection is too slow");
+  }
+  if (now.poses_dropped_queue > prev.poses_dropped_queue) {
+    p->Add("pose queue full: the filter is too slow");
+  }
+  if (now.controls_dropped_queue > prev.controls_dropped_queue) {
+    p->Add("control queue full: the filter is too slow");
+  }
+  if (now.frames_dropped_device > prev.frames_dropped_device) p->Add("the device dropped frames");
+  if (now.log_events_lost > prev.log_events_lost) p->Add("log events lost");
+}
+
+// ... and in the estimate and its inputs: resets, clocks, status, target, controls.
+void EstimateProblems(const DaemonCounters& now, const DaemonCounters& prev, const HealthStatus& s,
+                      Problems* p) {
+  if (now.filter_resets > prev.filter_resets) {
+    p->Add("filter diverged and was restarted from a batch fit");
+  }
+  if (now.time_resets > prev.time_resets) p->Add("a clock jumped back: new time base");
+  if (now.control_clock_steps > prev.control_clock_steps) {
+    p->Add("the robot's clock stepped (sender_utime): control stamps re-mapped");
+  }
+  if (s.filter_status == kincal::params_t::STATUS_DIVERGED) {
+    p->Add("filter diverged: poses fail the innovation gate");
+  } else if (s.filter_status == kincal::params_t::STATUS_MODEL_INADEQUATE) {
+    p->Add("the model does not fit the motion: " + s.model_check_evidence);
+  }
+  if (now.frames_captured > 0 && s.seconds_without_target > s.no_target_warn_s) {
+    p->Add(fmt::format("no target seen for {:.1f} s", s.seconds_without_target));
+  }
+  if (now.frames_out_of_order > prev.frames_out_of_order) {
+    p->Add("frames with repeated or earlier timestamps");
+  }
+  if (now.messages_rejected > prev.messages_rejected) {
+    p->Add("rejected control messages (last: " + s.last_reject + ")");
+  }
+  if (!s.recorder_error.empty()) p->Add(s.recorder_error);
+  if (s.expects_lcm_controls && now.controls_received == 0 && now.frames_captured > 0) {
+    p->Add("no controls received on " + s.controls_channel);
+  }
+}
+
 }  // namespace
 
 std::string SummaryLine(const DaemonCounters& c) {
@@ -55,52 +112,8 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
   h->control_jitter_max_ms = now.control_jitter_max_ms;
 
   Problems p;
-  if (!s.source_error.empty()) p.Add("source: " + s.source_error);
-  if (now.frames_bad > prev_.frames_bad) {
-    // A frame the detector could not use says why; events the source itself could not
-    // decode (a damaged or foreign log) have no frame to speak of.
-    p.Add("bad frames: " + (s.last_frame_error.empty()
-                                ? std::to_string(now.frames_bad - prev_.frames_bad) +
-                                      " the source could not decode (damaged or foreign data)"
-                                : s.last_frame_error));
-  }
-  if (!s.source_done && s.since_last_frame_ns > kNoFramesNs) p.Add("no frames for 2 s");
-  if (now.frames_dropped_queue > prev_.frames_dropped_queue) {
-    p.Add("frame queue full: detection is too slow");
-  }
-  if (now.poses_dropped_queue > prev_.poses_dropped_queue) {
-    p.Add("pose queue full: the filter is too slow");
-  }
-  if (now.controls_dropped_queue > prev_.controls_dropped_queue) {
-    p.Add("control queue full: the filter is too slow");
-  }
-  if (now.frames_dropped_device > prev_.frames_dropped_device) p.Add("the device dropped frames");
-  if (now.log_events_lost > prev_.log_events_lost) p.Add("log events lost");
-  if (now.filter_resets > prev_.filter_resets) {
-    p.Add("filter diverged and was restarted from a batch fit");
-  }
-  if (now.time_resets > prev_.time_resets) p.Add("a clock jumped back: new time base");
-  if (now.control_clock_steps > prev_.control_clock_steps) {
-    p.Add("the robot's clock stepped (sender_utime): control stamps re-mapped");
-  }
-  if (s.filter_status == kincal::params_t::STATUS_DIVERGED) {
-    p.Add("filter diverged: poses fail the innovation gate");
-  } else if (s.filter_status == kincal::params_t::STATUS_MODEL_INADEQUATE) {
-    p.Add("the model does not fit the motion: " + s.model_check_evidence);
-  }
-  if (now.frames_captured > 0 && s.seconds_without_target > s.no_target_warn_s) {
-    p.Add(fmt::format("no target seen for {:.1f} s", s.seconds_without_target));
-  }
-  if (now.frames_out_of_order > prev_.frames_out_of_order) {
-    p.Add("frames with repeated or earlier timestamps");
-  }
-  if (now.messages_rejected > prev_.messages_rejected) {
-    p.Add("rejected control messages (last: " + s.last_reject + ")");
-  }
-  if (!s.recorder_error.empty()) p.Add(s.recorder_error);
-  if (s.expects_lcm_controls && now.controls_received == 0 && now.frames_captured > 0) {
-    p.Add("no controls received on " + s.controls_channel);
-  }
+  PipelineProblems(now, prev_, s, &p);
+  EstimateProblems(now, prev_, s, &p);
   h->ok = p.text().empty() ? 1 : 0;
   h->message = p.text();
   prev_ = now;

@@ -11,6 +11,38 @@ constexpr auto kPoseWait = std::chrono::milliseconds(20);
 // A control clock jump is held this long (live) for the poses to show it too.
 constexpr TimeNs kHeldJumpWaitNs = kNsPerSecond;
 
+// What one pass of the merge knows about its inputs.
+struct MergeState {
+  bool stopping = false;
+  bool poses_over = false;        // the pose queue is closed and empty
+  bool no_more_controls = false;  // the controls ended and every one was used
+};
+
+// The controls jumped back and the poses did not follow: the controls alone start the new
+// time base (live after a while; lossless when the poses have ended).
+bool ControlsJumpAlone(const FilterStage& stage, const MergeInputs& in, const MergeState& s,
+                       const PoseRing& pending) {
+  return stage.holding_jump() && pending.empty() &&
+         (s.poses_over ||
+          (!in.lossless && MonotonicNs() - stage.held_since_mono_ns() > kHeldJumpWaitNs));
+}
+
+// Hands the held poses the controls now cover (or that waited long enough, or all of them
+// at the end) to the filter, oldest first.
+void ReleaseCovered(FilterStage* stage, const MergeInputs& in, const MergeState& s,
+                    PoseRing* pending) {
+  while (!pending->empty()) {
+    const PoseSample& f = pending->front();
+    const bool waited = !in.lossless && MonotonicNs() - f.arrival_mono_ns > in.max_control_delay_ns;
+    if (!(stage->ControlsCover(f) || s.no_more_controls || (s.poses_over && s.stopping) ||
+          waited)) {
+      break;
+    }
+    stage->AddPose(f, MonotonicNs());
+    pending->pop();
+  }
+}
+
 }  // namespace
 
 void RunPoseControlMerge(FilterStage* stage_ptr, const MergeInputs& in) {
@@ -27,29 +59,15 @@ void RunPoseControlMerge(FilterStage* stage_ptr, const MergeInputs& in) {
       }
       pending.push(p);
     }
-    const bool stopping = in.stop->load();
-    const bool poses_over = !got && in.poses->closed_and_empty();
-    const bool no_more_controls =
+    MergeState s;
+    s.stopping = in.stop->load();
+    s.poses_over = !got && in.poses->closed_and_empty();
+    s.no_more_controls =
         in.controls_done->load() && in.controls->size() == 0 && !stage.holding_jump();
-    if (no_more_controls) stage.DrainControls(MonotonicNs());
-    // The controls jumped back and the poses did not follow: the controls alone start the
-    // new time base (live after a while; lossless when the poses have ended).
-    if (stage.holding_jump() && pending.empty() &&
-        (poses_over ||
-         (!in.lossless && MonotonicNs() - stage.held_since_mono_ns() > kHeldJumpWaitNs))) {
-      stage.TakeControlJump(MonotonicNs());
-    }
-    while (!pending.empty()) {
-      const PoseSample& f = pending.front();
-      const bool waited =
-          !in.lossless && MonotonicNs() - f.arrival_mono_ns > in.max_control_delay_ns;
-      if (!(stage.ControlsCover(f) || no_more_controls || (poses_over && stopping) || waited)) {
-        break;
-      }
-      stage.AddPose(f, MonotonicNs());
-      pending.pop();
-    }
-    if (poses_over && (no_more_controls || stopping || !in.lossless)) {
+    if (s.no_more_controls) stage.DrainControls(MonotonicNs());
+    if (ControlsJumpAlone(stage, in, s, pending)) stage.TakeControlJump(MonotonicNs());
+    ReleaseCovered(&stage, in, s, &pending);
+    if (s.poses_over && (s.no_more_controls || s.stopping || !in.lossless)) {
       stage.DrainControls(MonotonicNs());
       for (; !pending.empty(); pending.pop()) stage.AddPose(pending.front(), MonotonicNs());
       break;

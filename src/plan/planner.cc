@@ -126,50 +126,68 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
 
 }  // namespace
 
-bool PlanOptions::IsValid(const System& sys, std::string* error) const {
-  const size_t nc = static_cast<size_t>(sys.num_controls());
-  if (!(duration_s > 0.0 && duration_s <= 3600.0) ||
-      !(control_rate_hz >= 1.0 && control_rate_hz <= 1000.0) ||
-      !(segment_s >= 1.0 / control_rate_hz && segment_s <= duration_s)) {
+namespace {
+
+// PlanOptions::IsValid by group: the timing, the control limits, the design.
+bool ValidTiming(const PlanOptions& o, std::string* error) {
+  if (!(o.duration_s > 0.0 && o.duration_s <= 3600.0) ||
+      !(o.control_rate_hz >= 1.0 && o.control_rate_hz <= 1000.0) ||
+      !(o.segment_s >= 1.0 / o.control_rate_hz && o.segment_s <= o.duration_s)) {
     *error =
         "duration in (0, 3600] s, rate in [1, 1000] Hz and a segment between one control "
         "period and the duration expected";
     return false;
   }
-  if (max_abs.size() != nc) {
+  return true;
+}
+
+bool ValidLimits(const PlanOptions& o, const System& sys, std::string* error) {
+  const size_t nc = static_cast<size_t>(sys.num_controls());
+  if (o.max_abs.size() != nc) {
     *error = "a limit for every control of " + std::string(sys.model().name()) + " expected (";
     for (const auto& c : sys.model().controls()) *error += c.name + "=.. ";
     *error += "missing)";
     return false;
   }
   for (size_t c = 0; c < nc; ++c) {
-    if (!(max_abs[c] > 0.0) || !std::isfinite(max_abs[c]) ||
-        (c < max_accel.size() && !(max_accel[c] >= 0.0))) {
+    if (!(o.max_abs[c] > 0.0) || !std::isfinite(o.max_abs[c]) ||
+        (c < o.max_accel.size() && !(o.max_accel[c] >= 0.0))) {
       *error = "limit of " + sys.model().controls()[c].name +
                ": a positive value (and an acceleration >= 0) expected";
       return false;
     }
   }
-  if (!(max_curvature >= 0.0) || levels < 3 || levels % 2 == 0 || levels > 9 ||
-      !(prior_sigmas >= 0.0)) {
+  return true;
+}
+
+bool ValidDesign(const PlanOptions& o, const System& sys, std::string* error) {
+  if (!(o.max_curvature >= 0.0) || o.levels < 3 || o.levels % 2 == 0 || o.levels > 9 ||
+      !(o.prior_sigmas >= 0.0)) {
     *error = "curvature >= 0, an odd number of levels in 3..9 and prior_sigmas >= 0 expected";
     return false;
   }
-  for (int i : care) {
+  for (int i : o.care) {
     if (i < 0 || i >= sys.num_params()) {
       *error = "care: a parameter index of the system expected";
       return false;
     }
   }
-  if (targets.size() != 0 && targets.size() != sys.num_params()) {
+  if (o.targets.size() != 0 && o.targets.size() != sys.num_params()) {
     *error = "targets: one sigma per parameter (0: none) expected";
     return false;
   }
-  if (start && !start->allFinite()) {
+  if (o.start && !o.start->allFinite()) {
     *error = "start: a finite pose expected";
     return false;
   }
-  return info.IsValid(error);
+  return true;
+}
+
+}  // namespace
+
+bool PlanOptions::IsValid(const System& sys, std::string* error) const {
+  return ValidTiming(*this, error) && ValidLimits(*this, sys, error) &&
+         ValidDesign(*this, sys, error) && info.IsValid(error);
 }
 
 Eigen::Vector3d StartPose(const Workspace& ws, const PlanOptions& o) {

@@ -94,6 +94,26 @@ double RealisedWheelRate(double w, int wheel, const WheelRateErrors& e,
   return w * (1.0 + gains[band][static_cast<size_t>(wheel)]);
 }
 
+namespace {
+
+// The scalar settings of the camera and the timing (ThesisOptions::IsValid).
+bool ValidMeasurement(const ThesisOptions& o, std::string* error) {
+  if (!(o.guess_error > 0.0) || !(o.centroid_sigma_px > 0.0) || !(o.camera_height_m > 0.0) ||
+      !(o.image_width_px > 0.0) || !(o.hfov_rad > 0.0 && o.hfov_rad < std::numbers::pi)) {
+    *error =
+        "guess_error, centroid_sigma_px, camera_height_m, image_width_px must be > 0 "
+        "and hfov_rad in (0, pi)";
+    return false;
+  }
+  if (!(o.stamp_step_s >= 0.0 && o.stamp_step_s < 0.5 / o.timing.rate_hz)) {
+    *error = "stamp_step_s must be >= 0 and under half a frame period";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool ThesisOptions::IsValid(std::string* error) const {
   if (runs < 1 || runs > 99) {
     *error = "runs must be in 1..99 (Table 6-4 has 99 experiments)";
@@ -103,17 +123,7 @@ bool ThesisOptions::IsValid(std::string* error) const {
     *error = "trials must be >= 1";
     return false;
   }
-  if (!(guess_error > 0.0) || !(centroid_sigma_px > 0.0) || !(camera_height_m > 0.0) ||
-      !(image_width_px > 0.0) || !(hfov_rad > 0.0 && hfov_rad < std::numbers::pi)) {
-    *error =
-        "guess_error, centroid_sigma_px, camera_height_m, image_width_px must be > 0 "
-        "and hfov_rad in (0, pi)";
-    return false;
-  }
-  if (!(stamp_step_s >= 0.0 && stamp_step_s < 0.5 / timing.rate_hz)) {
-    *error = "stamp_step_s must be >= 0 and under half a frame period";
-    return false;
-  }
+  if (!ValidMeasurement(*this, error)) return false;
   if (frames_per_run < 0 || frames_per_run > 100000 || (pixels && frames_per_run == 0)) {
     *error = "frames_per_run must be in 0..100000, and > 0 with pixels";
     return false;

@@ -181,6 +181,79 @@ Eigen::MatrixXd WithGainsCov(const Eigen::Matrix3d& model_cov, const GainModel& 
   return c;
 }
 
+// The joint fits with the look-up table's gains as nuisance parameters (each filter, and the
+// batch); returns the expected NNDE of the model parameters' bound at the truth.
+double FitWithGains(const GainModel& gm, const ThesisOptions& o, const ThesisDesign& d,
+                    const Eigen::Vector3d& truth, const Eigen::Vector3d& guess,
+                    const Eigen::Matrix3d& prior_cov, const BatchOptions& bopt, JointTally* joint,
+                    ThesisResult* res) {
+  const double gate = o.pixels ? kPixelGateNis : 0.0;
+  const Eigen::VectorXd g0 = WithGains(guess, gm, nullptr);
+  const Eigen::MatrixXd c0 = WithGainsCov(prior_cov, gm, o.wheel.gain_sigma);
+  for (const auto& f : o.filters) {
+    int gated = 0;
+    joint->Record(f + "+gains", RunFilter(*gm.sys, f, d, d.runs, g0, c0, gate, &gated), res);
+    if (gate > 0.0) res->poses_gated[f + "+gains"] += gated;
+  }
+  BatchOptions gopt = bopt;
+  gopt.prior = ParamPrior{g0, c0};
+  if (o.batch) joint->Record("batch+gains", RunBatch(*gm.sys, d, g0, gopt), res);
+  const BatchResult gb = BoundAt(*gm.sys, d.controls, d.all, WithGains(truth, gm, &d.gains),
+                                 d.starts, WithoutLoss(gopt));
+  KINCAL_CHECK(gb.status.ok(), gb.status.message().c_str());
+  return ExpectedNnde(gb.covariance.topLeftCorner(3, 3), truth);
+}
+
+// The Bayesian bound at the truth with the trials' prior: the joint one's expected NNDE
+// (returned) and, with per_run, each run's alone (into *per_run).
+double BoundTrial(const System& sys, const ThesisOptions& o, const ThesisDesign& d,
+                  const Eigen::Vector3d& truth, const BatchOptions& bopt, PerRunTally* per_run) {
+  const BatchResult bound = BoundAt(sys, d.controls, d.all, truth, d.starts, WithoutLoss(bopt));
+  KINCAL_CHECK(bound.status.ok(), bound.status.message().c_str());
+  if (o.per_run) {
+    for (const ThesisRun& run : d.runs) {
+      if (run.meas.empty()) continue;
+      const BatchResult b1 =
+          BoundAt(sys, d.controls, run.meas, truth, {run.start_pose}, WithoutLoss(bopt));
+      KINCAL_CHECK(b1.status.ok(), b1.status.message().c_str());
+      per_run->bound_sum_sq += std::pow(ExpectedNnde(b1.covariance, truth), 2);
+      ++per_run->bound_count;
+    }
+  }
+  return ExpectedNnde(bound.covariance, truth);
+}
+
+void FinishPerRun(const PerRunTally& per_run, const ThesisOptions& o, ThesisResult* res) {
+  for (const auto& [name, sum] : per_run.sum_sq) {
+    res->per_run_nnde_percent[name] = 100.0 * std::sqrt(sum / (o.runs * o.trials));
+    TableStats s = per_run.stats.at(name);
+    for (double* v : {&s.mean_nnde, &s.nnde_of_mean, &s.speed_scatter, &s.turn_scatter})
+      *v /= o.trials;
+    res->per_run_stats[name] = s;
+  }
+  if (per_run.bound_count > 0) {
+    res->per_run_bound_nnde_percent = 100.0 * std::sqrt(per_run.bound_sum_sq / per_run.bound_count);
+  }
+}
+
+void AddPoseErrors(const PoseErrorStats& trial, PoseErrorStats* sum) {
+  sum->frames += trial.frames;
+  sum->lost += trial.lost;
+  sum->gross += trial.gross;
+  sum->sum_sq += trial.sum_sq;
+  sum->sum_nees += trial.sum_nees;
+}
+
+void FinishPoses(const PoseErrorStats& poses, ThesisResult* res) {
+  const int measured = poses.frames - poses.lost - poses.gross;
+  res->frames_lost = poses.lost;
+  res->frames_gross = poses.gross;
+  if (measured > 0) {
+    res->pose_rms_error = (poses.sum_sq / measured).cwiseSqrt();
+    res->pose_nees = poses.sum_nees / measured;
+  }
+}
+
 }  // namespace
 
 ThesisResult ReproduceThesis(const ThesisOptions& o) {
@@ -235,11 +308,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
     res.frames = static_cast<int>(d.all.size());
     res.duration_s = 0.0;
     for (const auto& run : d.runs) res.duration_s += NsToSeconds(run.t1 - run.t0);
-    poses.frames += d.pose_errors.frames;
-    poses.lost += d.pose_errors.lost;
-    poses.gross += d.pose_errors.gross;
-    poses.sum_sq += d.pose_errors.sum_sq;
-    poses.sum_nees += d.pose_errors.sum_nees;
+    AddPoseErrors(d.pose_errors, &poses);
 
     const double gate = o.pixels ? kPixelGateNis : 0.0;
     for (const auto& f : o.filters) {
@@ -253,57 +322,18 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
     if (o.pixels) bopt.huber_scale = kPixelHuberScale;
     if (o.batch) joint.Record("batch", RunBatch(sys, d, guess, bopt), &res);
     if (o.nuisance_gains) {
-      const Eigen::VectorXd g0 = WithGains(guess, gm, nullptr);
-      const Eigen::MatrixXd c0 = WithGainsCov(prior_cov, gm, o.wheel.gain_sigma);
-      for (const auto& f : o.filters) {
-        int gated = 0;
-        joint.Record(f + "+gains", RunFilter(*gm.sys, f, d, d.runs, g0, c0, gate, &gated), &res);
-        if (gate > 0.0) res.poses_gated[f + "+gains"] += gated;
-      }
-      BatchOptions gopt = bopt;
-      gopt.prior = ParamPrior{g0, c0};
-      if (o.batch) joint.Record("batch+gains", RunBatch(*gm.sys, d, g0, gopt), &res);
-      const BatchResult gb = BoundAt(*gm.sys, d.controls, d.all, WithGains(truth, gm, &d.gains),
-                                     d.starts, WithoutLoss(gopt));
-      KINCAL_CHECK(gb.status.ok(), gb.status.message().c_str());
-      gains_bound_sq += std::pow(ExpectedNnde(gb.covariance.topLeftCorner(3, 3), truth), 2);
+      gains_bound_sq +=
+          std::pow(FitWithGains(gm, o, d, truth, guess, prior_cov, bopt, &joint, &res), 2);
     }
-    // Bayesian bound at the truth, with the same prior.
-    const BatchResult bound = BoundAt(sys, d.controls, d.all, truth, d.starts, WithoutLoss(bopt));
-    KINCAL_CHECK(bound.status.ok(), bound.status.message().c_str());
-    const double eb = ExpectedNnde(bound.covariance, truth);
+    const double eb = BoundTrial(sys, o, d, truth, bopt, &per_run);
     bound_sq += eb * eb;
     res.bound_trial_nnde.push_back(eb);
-    if (o.per_run) {
-      for (const ThesisRun& run : d.runs) {
-        if (run.meas.empty()) continue;
-        const BatchResult b1 =
-            BoundAt(sys, d.controls, run.meas, truth, {run.start_pose}, WithoutLoss(bopt));
-        KINCAL_CHECK(b1.status.ok(), b1.status.message().c_str());
-        per_run.bound_sum_sq += std::pow(ExpectedNnde(b1.covariance, truth), 2);
-        ++per_run.bound_count;
-      }
-    }
   }
   joint.Finish(o.trials, &res);
   res.joint_bound_nnde_percent = 100.0 * std::sqrt(bound_sq / o.trials);
   res.joint_gains_bound_nnde_percent = 100.0 * std::sqrt(gains_bound_sq / o.trials);
-  for (const auto& [name, sum] : per_run.sum_sq) {
-    res.per_run_nnde_percent[name] = 100.0 * std::sqrt(sum / (o.runs * o.trials));
-    TableStats s = per_run.stats.at(name);
-    for (double* v : {&s.mean_nnde, &s.nnde_of_mean, &s.speed_scatter, &s.turn_scatter})
-      *v /= o.trials;
-    res.per_run_stats[name] = s;
-  }
-  if (per_run.bound_count > 0)
-    res.per_run_bound_nnde_percent = 100.0 * std::sqrt(per_run.bound_sum_sq / per_run.bound_count);
-  const int measured = poses.frames - poses.lost - poses.gross;
-  res.frames_lost = poses.lost;
-  res.frames_gross = poses.gross;
-  if (measured > 0) {
-    res.pose_rms_error = (poses.sum_sq / measured).cwiseSqrt();
-    res.pose_nees = poses.sum_nees / measured;
-  }
+  FinishPerRun(per_run, o, &res);
+  FinishPoses(poses, &res);
   return res;
 }
 

@@ -294,16 +294,10 @@ CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
   return Refine(views, o, intr, poses);
 }
 
-}  // namespace
-
-CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
-                                  const CalibrationOptions& o) {
-  if (o.width <= 0 || o.height <= 0)
-    throw std::runtime_error("calibration: image size must be given (WxH)");
-  if (views_in.size() < 3)
-    throw std::runtime_error("calibration: at least 3 views are needed, got " +
-                             std::to_string(views_in.size()));
-  // Planar boards: shift each view's plane to Z = 0.
+// The views as the fit takes them: each checked (6+ point pairs, image points inside the
+// image), a planar board's plane shifted to Z = 0. Throws naming the view.
+std::vector<CalibrationView> CheckedViews(const std::vector<CalibrationView>& views_in,
+                                          const CalibrationOptions& o) {
   std::vector<CalibrationView> views = views_in;
   for (auto& v : views) {
     if (v.object.size() < 6 || v.object.size() != v.image.size()) {
@@ -325,19 +319,13 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
       }
     }
   }
-  // Non-planar views (3-D rigs): DLT per view gives K, R, t directly; K is their mean.
-  auto is_planar = [](const CalibrationView& v) {
-    for (const auto& p : v.object) {
-      if (p.z() != 0.0) return false;
-    }
-    return true;
-  };
-  std::vector<int> dlt_views;
-  for (size_t i = 0; i < views.size(); ++i) {
-    if (!is_planar(views[i])) dlt_views.push_back(static_cast<int>(i));
-  }
-  if (!dlt_views.empty()) return CalibrateFromDlt(views, dlt_views, o);
-  // Zhang: V b = 0 for B = K^-T K^-1 (zero skew).
+  return views;
+}
+
+// Zhang's closed form for planar views: V b = 0 for B = K^-T K^-1 (zero skew), then each
+// view's pose from its homography; refined by Refine.
+CalibrationResult CalibrateFromHomographies(const std::vector<CalibrationView>& views,
+                                            const CalibrationOptions& o) {
   std::vector<Eigen::Matrix3d> Hs;
   Eigen::MatrixXd V(2 * views.size() + 1, 6);
   for (size_t i = 0; i < views.size(); ++i) {
@@ -368,6 +356,31 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
     poses[i] = PoseFromHomography(K, Hs[i]);
   }
   return Refine(views, o, intr, poses);
+}
+
+}  // namespace
+
+CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
+                                  const CalibrationOptions& o) {
+  if (o.width <= 0 || o.height <= 0)
+    throw std::runtime_error("calibration: image size must be given (WxH)");
+  if (views_in.size() < 3)
+    throw std::runtime_error("calibration: at least 3 views are needed, got " +
+                             std::to_string(views_in.size()));
+  const std::vector<CalibrationView> views = CheckedViews(views_in, o);
+  // Non-planar views (3-D rigs): DLT per view gives K, R, t directly; K is their mean.
+  auto is_planar = [](const CalibrationView& v) {
+    for (const auto& p : v.object) {
+      if (p.z() != 0.0) return false;
+    }
+    return true;
+  };
+  std::vector<int> dlt_views;
+  for (size_t i = 0; i < views.size(); ++i) {
+    if (!is_planar(views[i])) dlt_views.push_back(static_cast<int>(i));
+  }
+  if (!dlt_views.empty()) return CalibrateFromDlt(views, dlt_views, o);
+  return CalibrateFromHomographies(views, o);
 }
 
 }  // namespace kincal::vision
