@@ -1,14 +1,18 @@
 #!/usr/bin/env bash
 # `cmake --install` into a scratch prefix, then use what was installed: kincald runs its
 # default (simulated) configuration from PREFIX/share/kincal, kincal export works, the LCM
-# Python module imports, and the systemd unit and LCM sources are in place.
+# Python module imports, and the systemd unit, every layer's library and LCM sources are in
+# place.
 #   tests/install_check.sh BUILD_DIR PYTHON
 set -euo pipefail
 build=$1 python=$2
 prefix=$build/install-test
 rm -rf "$prefix"
 cmake --install "$build" --prefix "$prefix" >/dev/null
-for f in bin/kincal bin/kincald lib/libkincal.so lib/systemd/system/kincald.service \
+for layer in core io estimation vision sim analysis plan daemon; do
+  [ -e "$prefix/lib/libkincal_$layer.so" ] || { echo "install_check: missing lib/libkincal_$layer.so"; exit 1; }
+done
+for f in bin/kincal bin/kincald lib/systemd/system/kincald.service \
          share/kincal/config/kincald_sim.yaml share/kincal/config/kincald_v4l2.yaml \
          share/kincal/lcm/params_t.lcm include/kincal/daemon/daemon.h include/kincal/lcmtypes/kincal/params_t.hpp \
          lib/python3/dist-packages/kincal/params_t.py share/kincal/scripts/kincal_watch.py \

@@ -126,7 +126,9 @@ std::string Html(const AnalyzeResult& r) {
 }  // namespace
 
 Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
-  std::filesystem::create_directories(dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Status::Error(dir + ": cannot create the report folder (" + ec.message() + ")");
   json j;
   j["model"] = r.model;
   j["source"] = r.source;

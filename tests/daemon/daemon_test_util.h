@@ -10,6 +10,7 @@
 #include <map>
 #include <string>
 
+#include "daemon/frame_source.h"
 #include "kincal/daemon/config.h"
 #include "kincal/io/checkpoint.h"
 #include "kincal/sim/scenario.h"
@@ -53,6 +54,27 @@ inline void ExpectWithin3Sigma(const Checkpoint& e, const std::map<std::string, 
     EXPECT_LT(std::abs(e.values[i] - truth.at(e.names[i])), 3 * sigma)
         << e.names[i] << " = " << e.values[i] << " +- " << sigma << ", truth "
         << truth.at(e.names[i]);
+  }
+}
+
+struct Counted {
+  int frames = 0, controls = 0;
+  int64_t last_utime = 0;
+  bool in_order = true;
+};
+
+// Reads a started source to its end (or `max_frames`).
+inline void Drain(FrameSource* s, Counted* c, int max_frames = 1 << 30) {
+  Frame f;
+  std::string error;
+  while (c->frames < max_frames) {
+    const SourceStatus st = s->Next(&f, 1000, &error);
+    if (st == SourceStatus::kEnd) break;
+    ASSERT_NE(st, SourceStatus::kError) << error;
+    if (st != SourceStatus::kFrame) continue;
+    c->in_order = c->in_order && f.utime > c->last_utime;
+    c->last_utime = f.utime;
+    ++c->frames;
   }
 }
 

@@ -1,7 +1,7 @@
-// The frame sources and their factory: each source declares what it can do, the factory
-// picks the one the config names; the replay source hands over every frame and control of
-// a log in order; the simulated camera renders the robot; a device that cannot be opened
-// is a status naming it and errno's text.
+// The frame-source factory (src/daemon/sources.cc): the source the config names, declaring
+// what it can do; a device that cannot be opened is a status naming it and errno's text.
+// The replay and simulated sources have their own tests (replay_source_test.cc,
+// sim_source_test.cc).
 #include "daemon/sources.h"
 
 #include <gtest/gtest.h>
@@ -16,156 +16,10 @@
 namespace kincal::daemon {
 namespace {
 
+using test_util::Counted;
+using test_util::Drain;
 using test_util::SimConfig;
 using test_util::TempPath;
-
-const std::string kGoldenLog = ::kincal::testing::SourceDir() + "/tests/data/golden_replay.lcm";
-
-struct Counted {
-  int frames = 0, controls = 0;
-  int64_t last_utime = 0;
-  bool in_order = true;
-};
-
-// Reads a started source to its end (or `max_frames`).
-void Drain(FrameSource* s, Counted* c, int max_frames = 1 << 30) {
-  Frame f;
-  std::string error;
-  while (c->frames < max_frames) {
-    const SourceStatus st = s->Next(&f, 1000, &error);
-    if (st == SourceStatus::kEnd) break;
-    ASSERT_NE(st, SourceStatus::kError) << error;
-    if (st != SourceStatus::kFrame) continue;
-    c->in_order = c->in_order && f.utime > c->last_utime;
-    c->last_utime = f.utime;
-    ++c->frames;
-  }
-}
-
-TEST(Sources, ReplayOfALogIsLosslessAndCarriesItsControls) {
-  DaemonConfig c =
-      LoadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml");
-  c.source = SourceKind::kReplay;
-  c.replay.path = kGoldenLog;
-  c.replay.speed = 0;
-  Counted n;
-  auto src = MakeSource(
-      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr);
-  ASSERT_NE(src, nullptr);
-  const SourceCapabilities caps = src->capabilities();
-  EXPECT_TRUE(caps.lossless);
-  EXPECT_TRUE(caps.carries_controls);
-  EXPECT_TRUE(caps.controls_end_with_frames);
-  EXPECT_FALSE(caps.can_reopen);
-  ASSERT_TRUE(src->Start().ok());
-  Drain(src.get(), &n);
-  src->Stop();
-  EXPECT_EQ(n.frames, 151);  // 0 to 5 s at 30 fps, as recorded
-  EXPECT_GT(n.controls, 100);
-  EXPECT_TRUE(n.in_order);
-  EXPECT_EQ(src->rejected(), 0);
-}
-
-TEST(Sources, ReplayOfAMissingLogNamesIt) {
-  ReplayOptions r;
-  r.path = TempPath("no_such.lcm");
-  auto src = MakeReplaySource(r, LcmOptions{}, nullptr);
-  const Status s = src->Start();
-  ASSERT_FALSE(s.ok());
-  EXPECT_NE(s.message().find("no_such.lcm"), std::string::npos) << s.message();
-  EXPECT_NE(s.message().find("No such file or directory"), std::string::npos) << s.message();
-  r.path = std::filesystem::temp_directory_path().string();
-  const Status dir = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
-  EXPECT_NE(dir.message().find("is a directory, expected an LCM log file"), std::string::npos)
-      << dir.message();
-  r.path = TempPath("empty.lcm");
-  { std::ofstream touch(r.path); }
-  const Status empty = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
-  EXPECT_NE(empty.message().find("the log is empty (0 bytes)"), std::string::npos)
-      << empty.message();
-  r.path = "/dev/zero";
-  const Status dev = MakeReplaySource(r, LcmOptions{}, nullptr)->Start();
-  EXPECT_NE(dev.message().find("is not a regular file"), std::string::npos) << dev.message();
-}
-
-TEST(Sources, SimulatedCameraRendersTheRobotAndPublishesItsControls) {
-  DaemonConfig c = SimConfig(2.0);
-  Counted n;
-  // The source keeps its own copy of the set-up: a temporary is fine.
-  auto src = MakeSource(
-      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; },
-      [](const std::string&, const void*, size_t) {});
-  ASSERT_NE(src, nullptr);
-  EXPECT_TRUE(src->capabilities().carries_controls);
-  EXPECT_TRUE(src->capabilities().lossless);  // sim.speed 0
-  ASSERT_TRUE(src->Start().ok());
-  Drain(src.get(), &n);
-  src->Stop();
-  EXPECT_NEAR(n.frames, 2.0 * 30, 2);
-  EXPECT_GT(n.controls, 0);
-  EXPECT_TRUE(n.in_order);
-}
-
-// The simulated run is made a chunk at a time (memory bounded by sim.chunk_s, not by the
-// duration): frames and commands continue across the seams with no gap, repeat or reorder.
-struct SimStream {
-  std::vector<int64_t> frame_utimes, sequences, control_utimes;
-};
-
-SimStream DrainSim(double duration_s, double chunk_s) {
-  DaemonConfig c = SimConfig(duration_s);
-  c.sim.chunk_s = chunk_s;
-  SimStream out;
-  auto src = MakeSource(
-      c, LoadVisionSetup(c),
-      [&out](const void* data, size_t size, int64_t) {
-        kincal::controls_t m;
-        if (m.decode(data, 0, static_cast<int>(size)) > 0) out.control_utimes.push_back(m.utime);
-      },
-      [](const std::string&, const void*, size_t) {});
-  EXPECT_TRUE(src->Start().ok());
-  Frame f;
-  std::string error;
-  for (SourceStatus st; (st = src->Next(&f, 1000, &error)) != SourceStatus::kEnd;) {
-    if (st != SourceStatus::kFrame) continue;
-    out.frame_utimes.push_back(f.utime);
-    out.sequences.push_back(f.sequence);
-  }
-  src->Stop();
-  return out;
-}
-
-std::pair<int64_t, int64_t> IntervalRange(const std::vector<int64_t>& t) {
-  int64_t lo = INT64_MAX, hi = 0;
-  for (size_t i = 1; i < t.size(); ++i) {
-    lo = std::min(lo, t[i] - t[i - 1]);
-    hi = std::max(hi, t[i] - t[i - 1]);
-  }
-  return {lo, hi};
-}
-
-TEST(Sources, SimulatedRunIsMadeInChunksWithoutSeams) {
-  const SimStream whole = DrainSim(4.5, 300.0);
-  const SimStream chunked = DrainSim(4.5, 1.0);  // four seams
-  ASSERT_GT(whole.frame_utimes.size(), 100u);
-  EXPECT_NEAR(static_cast<double>(chunked.frame_utimes.size()),
-              static_cast<double>(whole.frame_utimes.size()), 1.0);
-  for (size_t i = 0; i < chunked.sequences.size(); ++i)
-    ASSERT_EQ(chunked.sequences[i], static_cast<int64_t>(i));
-  // Frame intervals across seams are the camera's own (30 fps, no jitter in this scenario).
-  const auto [lo_w, hi_w] = IntervalRange(whole.frame_utimes);
-  const auto [lo_c, hi_c] = IntervalRange(chunked.frame_utimes);
-  EXPECT_GE(lo_c, lo_w - 1);
-  EXPECT_LE(hi_c, hi_w + 1);
-  // Commands: strictly later each time, at the scenario's rate, up to the last frame.
-  ASSERT_GT(chunked.control_utimes.size(), 10u);
-  const auto [clo, chi] = IntervalRange(chunked.control_utimes);
-  const auto [wlo, whi] = IntervalRange(whole.control_utimes);
-  EXPECT_GT(clo, 0);
-  EXPECT_LE(chi, whi + 1);
-  EXPECT_GE(chunked.control_utimes.back(), chunked.frame_utimes.back() - whi);
-  (void)wlo;
-}
 
 TEST(Sources, V4l2DeviceThatIsNotThereIsAStatusWithErrno) {
   DaemonConfig c = SimConfig(1.0);
