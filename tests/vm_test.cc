@@ -206,11 +206,7 @@ TEST(VmV4l2, PosesRenderedIntoVividComeBackThroughTheCaptureNode) {
   std::string error;
   int64_t last_utime = 0, frames = 0;
   for (const auto& truth : poses) {
-    vision::Pose3 pose;
-    pose.R =
-        vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-    pose.t = vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), cfg.target.height_m) +
-             vis.floor.t_cf;
+    const vision::Pose3 pose = vision::CameraPoseOnFloor(vis.floor, truth, cfg.target.height_m);
     output.SetImage(vision::RenderTarget(vis.camera, pose, vis.layout, ro, rng).image);
     if (&truth == &poses.front()) output.StartFeeding();
     int good = 0;

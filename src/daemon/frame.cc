@@ -154,13 +154,13 @@ void RawToGrey(const Frame& f, cv::Mat* grey) {
 
 // MJPEG and PNG: decoded straight to grey after the header's size is checked.
 void EncodedToGrey(const Frame& f, cv::Mat* grey) {
-  const std::string format(PixelFormatName(f.format));
-  if (f.data.empty()) throw FrameError(format + " frame is empty");
+  const std::string_view format = PixelFormatName(f.format);
+  if (f.data.empty()) throw FrameError(std::string(format) + " frame is empty");
   // cv::imdecode picks a decoder by content (DICOM, TIFF, JPEG 2000, HDR...; one of
   // them aborts the process on malformed input): only the declared format goes
   // through, with its header's image size checked before anything is decompressed.
   std::string why;
-  if (!EncodedHeaderMatches(f, &why)) throw FrameError(format + " frame: " + why);
+  if (!EncodedHeaderMatches(f, &why)) throw FrameError(std::string(format) + " frame: " + why);
   const cv::Mat buf(1, static_cast<int>(f.data.size()), CV_8UC1,
                     const_cast<uint8_t*>(f.data.data()));
   // Straight to grey (libjpeg-turbo then skips the chroma's inverse DCT and the colour
@@ -169,14 +169,15 @@ void EncodedToGrey(const Frame& f, cv::Mat* grey) {
   try {
     cv::imdecode(buf, cv::IMREAD_GRAYSCALE, &decoded);
   } catch (const cv::Exception& e) {
-    throw FrameError(format + " frame: decoder error: " + e.what());
+    throw FrameError(std::string(format) + " frame: decoder error: " + e.what());
   }
   if (decoded.empty())
-    throw FrameError(format + " frame: corrupt data (" + std::to_string(f.data.size()) + " bytes)");
+    throw FrameError(std::string(format) + " frame: corrupt data (" +
+                     std::to_string(f.data.size()) + " bytes)");
   if (decoded.cols != f.width || decoded.rows != f.height) {
-    throw FrameError(format + " frame decodes to " + std::to_string(decoded.cols) + "x" +
-                     std::to_string(decoded.rows) + ", expected " + std::to_string(f.width) + "x" +
-                     std::to_string(f.height));
+    throw FrameError(std::string(format) + " frame decodes to " + std::to_string(decoded.cols) +
+                     "x" + std::to_string(decoded.rows) + ", expected " + std::to_string(f.width) +
+                     "x" + std::to_string(f.height));
   }
 }
 

@@ -110,11 +110,7 @@ class SimSource final : public FrameSource {
     if (!carrying_) {
       Eigen::Vector3d target;
       truth_.Measure(x_.data(), target.data());
-      const Eigen::Matrix3d Rz =
-          Eigen::AngleAxisd(target.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-      pose.R = vis_.floor.R_cf * Rz;
-      pose.t = vis_.floor.R_cf * Eigen::Vector3d(target.x(), target.y(), vis_.target_height_m) +
-               vis_.floor.t_cf;
+      pose = vision::CameraPoseOnFloor(vis_.floor, target, vis_.target_height_m);
       in_view = InView(pose);
       if (!in_view) {
         carrying_ = true;

@@ -46,11 +46,7 @@ TEST(DetectionStage, FramesBecomePublishedPosesInOrder) {
   // Three frames: the target at a known pose, an empty floor, and a frame too short to be
   // an image.
   const Eigen::Vector3d truth(0.12, -0.07, 0.4);
-  vision::Pose3 pose;
-  pose.R =
-      vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  pose.t =
-      vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), vis.target_height_m) + vis.floor.t_cf;
+  const vision::Pose3 pose = vision::CameraPoseOnFloor(vis.floor, truth, vis.target_height_m);
   std::mt19937_64 rng(4);
   vision::RenderOptions ro;
   Frame with, without, broken;

@@ -31,11 +31,7 @@ Scatter MeasureScatter(double configured_sigma_px, double noise_grey,
   ro.noise_sigma = noise_grey;
   std::mt19937_64 rng(3);
   const Eigen::Vector3d truth(0.12, -0.07, 0.4);
-  vision::Pose3 pose;
-  pose.R =
-      vis.floor.R_cf * Eigen::AngleAxisd(truth.z(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  pose.t =
-      vis.floor.R_cf * Eigen::Vector3d(truth.x(), truth.y(), vis.target_height_m) + vis.floor.t_cf;
+  const vision::Pose3 pose = vision::CameraPoseOnFloor(vis.floor, truth, vis.target_height_m);
   double nees = 0, pos = 0;
   int n = 0;
   Frame f;

@@ -34,10 +34,10 @@ TEST(Publisher, EachMessageGoesWhereItIsSent) {
   kincal::pose_t pose{};
   pose.schema_version = 1;
   pose.x = 1.25;
-  pub.Publish("POSE", 100, pose);                      // both
+  pub.Publish("POSE", 100, pose);                         // both
   pub.Publish("LOG_ONLY", 200, pose, /*network=*/false);  // the log alone
   const char raw[3] = {'a', 'b', 'c'};
-  pub.PublishRaw("RAW_NET", raw, sizeof(raw));  // LCM alone
+  pub.PublishRaw("RAW_NET", raw, sizeof(raw));   // LCM alone
   pub.Record("RAW_LOG", 300, raw, sizeof(raw));  // the log alone
   while (pub.lcm()->handleTimeout(0) > 0) {
   }

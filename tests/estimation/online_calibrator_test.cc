@@ -37,6 +37,13 @@ struct SimulatedUnicycle {
     cal.Initialize(m0.t_ns, m0.z, m0.R, ToVec({1.0 / 1.1 * 1.06, 1.1 * 0.93}), P);
     return cal;
   }
+  // The poses [1, end) into the calibrator.
+  void Feed(OnlineCalibrator* cal, size_t end) const {
+    for (size_t k = 1; k < end; ++k) {
+      const auto& m = data.meas[k];
+      cal->AddPose(m.t_ns, m.z, m.R);
+    }
+  }
 };
 
 TEST(OnlineCalibrator, ConvergesToTheTruthWithinItsSigma) {
@@ -72,10 +79,7 @@ TEST(OnlineCalibrator, APoseFromThePastIsRefusedAndChangesNothing) {
 TEST(OnlineCalibrator, AnOutlierFailsTheGateAndIsNotUsed) {
   const SimulatedUnicycle run;
   OnlineCalibrator cal = run.Start();
-  for (size_t k = 1; k < 100; ++k) {
-    const auto& m = run.data.meas[k];
-    cal.AddPose(m.t_ns, m.z, m.R);
-  }
+  run.Feed(&cal, 100);
   const VecN<kMaxState> params = cal.params();
   const auto& m = run.data.meas[100];
   const Eigen::Vector3d far = m.z + Eigen::Vector3d(0.5, 0.0, 0.0);  // 50 cm off
@@ -92,10 +96,7 @@ TEST(OnlineCalibrator, AnOutlierFailsTheGateAndIsNotUsed) {
 TEST(OnlineCalibrator, APoseResetKeepsTheParametersAndTheirCovariance) {
   const SimulatedUnicycle run;
   OnlineCalibrator cal = run.Start();
-  for (size_t k = 1; k < 200; ++k) {
-    const auto& m = run.data.meas[k];
-    cal.AddPose(m.t_ns, m.z, m.R);
-  }
+  run.Feed(&cal, 200);
   const VecN<kMaxState> params = cal.params();
   const StateMat C = cal.params_covariance();
   const auto& m = run.data.meas[250];

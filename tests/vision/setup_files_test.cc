@@ -36,7 +36,8 @@ std::string Thrown(F f) {
 }
 
 TEST(SetupFiles, TheShippedLargeTargetReadsAsWritten) {
-  const TargetLayout t = ReadTargetLayoutYaml(kincal::testing::SourceDir() + "/config/target_large.yaml");
+  const TargetLayout t =
+      ReadTargetLayoutYaml(kincal::testing::SourceDir() + "/config/target_large.yaml");
   EXPECT_EQ(t.name, "large");
   EXPECT_DOUBLE_EQ(t.marker_radius_m, 0.024);
   EXPECT_DOUBLE_EQ(t.plate_size_m.x(), 0.36);
@@ -73,8 +74,8 @@ TEST(SetupFiles, ABadTargetIsRefusedWithItsPathAndLine) {
 
 TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
   const double a = 0.3;
-  cv::Mat R = (cv::Mat_<double>(3, 3) << std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a),
-               0, 0, 0, 1);
+  cv::Mat R = (cv::Mat_<double>(3, 3) << std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0,
+               0, 0, 1);
   cv::Mat t = (cv::Mat_<double>(3, 1) << 0.1, -0.2, 1.5);
   const std::string good = TempPath("floor.yaml");
   {
