@@ -52,7 +52,7 @@ std::string Python() {
 }
 
 struct AnalyzeArgs {
-  std::string model, controls, poses, log, mrclam, out, init, effects = "auto", pose_sigma;
+  std::string model, controls, poses, log, mrclam, out, init, fix, effects = "auto", pose_sigma;
   int robot = 0;
   AnalyzeOptions opt;
 };
@@ -67,6 +67,9 @@ AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
   if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
   o.model = a->model;
   if (const Status s = ParseInitList(a->init, &o.init); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
+  if (const Status s = ParseInitList(a->fix, &o.fixed, "--fix"); !s.ok()) {
     throw std::runtime_error(s.message());
   }
   if (a->effects == "auto" || a->effects == "none") {
@@ -160,6 +163,12 @@ void PrintSummary(const AnalyzeResult& r, const std::string& out) {
     std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12)
               << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit << "\n";
   }
+  if (!r.after.fixed.empty()) {
+    std::cout << "held (--fix):";
+    for (const auto& f : r.after.fixed) std::cout << " " << f;
+    std::cout << "\n";
+  }
+  for (const auto& w : r.after.weak) std::cout << "note: " << w << "\n";
   std::cout << "effects accepted:";
   for (const auto& e : r.after.effects) std::cout << " " << e;
   if (r.after.effects.empty()) std::cout << " none";
@@ -186,6 +195,8 @@ Command AddAnalyze(CLI::App& app) {
   app.add_option("--robot", a->robot, "MR.CLAM robot number");
   app.add_option("--out", a->out, "output directory")->required();
   app.add_option("--init", a->init, "initial guesses, name=value,...");
+  app.add_option("--fix", a->fix,
+                 "model parameters held at known values (not fitted), name=value,...");
   app.add_option("--effects", a->effects, "auto | none | effect,effect[channel],...")
       ->capture_default_str();
   app.add_option("--fit-fraction", a->opt.fit_fraction, "fraction of the span used for fitting")

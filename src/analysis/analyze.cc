@@ -82,6 +82,12 @@ bool AnalyzeOptions::IsValid(std::string* error) const {
     *error = "--effects must be auto, none or a list of effect names";
     return false;
   }
+  for (const auto& [name, v] : fixed) {
+    if (!std::isfinite(v)) {
+      *error = "--fix " + name + ": the value must be finite";
+      return false;
+    }
+  }
   if (pose_sigma && !((pose_sigma->array() > 0.0).all())) {
     *error = "pose sigmas must be > 0";
     return false;
@@ -260,8 +266,10 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   std::vector<std::shared_ptr<const Effect>> base_effects;
   MakeBaseModel(o, &model, &base_effects);
   const System bare(model, base_effects);  // the model as it stands (bare unless base effects)
-  const Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
+  Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
+  const std::vector<int> fixed = analysis::FixParams(bare, o.fixed, &p0);
   Dataset d = analysis::Prepare(rec, o, &res.warnings);
+  d.fixed = fixed;
   res.pose_sigma = d.sigma;
   res.pose_sigma_estimated = !o.pose_sigma.has_value();
   res.t_begin_s = std::max(d.t.front(), d.t_ctrl0);

@@ -3,6 +3,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 #include <sstream>
 
@@ -11,13 +12,16 @@
 namespace kincal::analysis {
 
 Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
-           const Eigen::VectorXd& p0, bool covariance, int threads, int max_iterations) {
+           const Eigen::VectorXd& p0, const std::vector<int>& fixed, bool covariance, int threads,
+           int max_iterations) {
   BatchOptions o;
+  o.fixed = fixed;
   o.compute_covariance = false;
   o.profiled_covariance = covariance;
   o.max_iterations = max_iterations;
   o.num_threads = threads;
   Fit f;
+  f.fixed = fixed;
   const BatchResult r = FitBatch(sys, u, meas, p0, o);
   if (!r.status.ok()) return f;  // not ok: the caller tries another start or candidate
   f.p = r.params;
@@ -53,7 +57,13 @@ std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
   for (int i = 0; i < np; ++i) {
     s[i] = std::max(std::abs(f.p[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
   }
-  const Eigen::MatrixXd I = s.asDiagonal() * f.info * s.asDiagonal();
+  Eigen::MatrixXd I = s.asDiagonal() * f.info * s.asDiagonal();
+  const double largest = std::max(I.diagonal().maxCoeff(), 1.0);
+  for (int i : f.fixed) {  // held: determined by the user, not by the data
+    I.row(i).setZero();
+    I.col(i).setZero();
+    I(i, i) = largest;
+  }
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(I);
   const double top = std::max(es.eigenvalues().maxCoeff(), 1e-300);
   for (int k = 0; k < np; ++k) {
@@ -68,8 +78,13 @@ std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
       if (i != imax && std::abs(v[i]) > 0.3 * std::abs(v[imax]))
         others += (others.empty() ? "" : ", ") + sys.params()[static_cast<size_t>(i)].name;
     }
-    if (!others.empty()) msg += " (it trades off against " + others + ")";
-    if (!pi.excitation.empty()) msg += "; excite it with " + pi.excitation;
+    if (!others.empty()) {
+      msg += " (it trades off against " + others + "): hold one at a known value (--fix " +
+             pi.name + "=VALUE)";
+      if (!pi.excitation.empty()) msg += " or excite it with " + pi.excitation;
+    } else if (!pi.excitation.empty()) {
+      msg += "; excite it with " + pi.excitation;
+    }
     msgs.push_back(msg);
   }
   return msgs;
@@ -92,12 +107,69 @@ Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, dou
   return p;
 }
 
+std::vector<int> FixParams(const System& sys, const std::map<std::string, double>& fixed,
+                           Eigen::VectorXd* p0) {
+  const KinematicModel& model = sys.model();
+  std::string known;
+  for (const auto& q : model.params()) known += (known.empty() ? "" : ", ") + q.name;
+  std::vector<int> idx;
+  for (const auto& [name, v] : fixed) {
+    const int i = model.ParamIndex(name);
+    if (i < 0) {
+      throw AnalysisError("--fix: model '" + std::string(model.name()) + "' has no parameter '" +
+                          name + "' (its parameters: " + known + ")");
+    }
+    (*p0)[i] = v;
+    idx.push_back(i);
+  }
+  if (!idx.empty() && static_cast<int>(idx.size()) == model.num_params()) {
+    throw AnalysisError("--fix: every parameter of model '" + std::string(model.name()) +
+                        "' is fixed (" + known + "): nothing is left to calibrate");
+  }
+  std::sort(idx.begin(), idx.end());
+  return idx;
+}
+
+std::vector<std::string> WeaklyDetermined(const System& sys, const Fit& f) {
+  std::vector<std::string> out;
+  const int np = static_cast<int>(f.p.size());
+  if (f.cov_robust.rows() != np) return out;
+  auto held = [&](int i) { return std::find(f.fixed.begin(), f.fixed.end(), i) != f.fixed.end(); };
+  auto sigma = [&](int i) { return std::sqrt(std::max(f.cov_robust(i, i), 0.0)); };
+  auto name = [&](int i) { return sys.params()[static_cast<size_t>(i)].name; };
+  for (int i = 0; i < np; ++i) {
+    if (held(i)) continue;
+    const auto& pi = sys.params()[static_cast<size_t>(i)];
+    std::string partners;
+    for (int j = 0; j < np; ++j) {
+      if (j == i || held(j) || sigma(i) <= 0.0 || sigma(j) <= 0.0) continue;
+      const double r = f.cov_robust(i, j) / (sigma(i) * sigma(j));
+      if (std::abs(r) > 0.98) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "%s (correlation %+.3f)", name(j).c_str(), r);
+        partners += (partners.empty() ? "" : ", ") + std::string(buf);
+      }
+    }
+    const bool loose = pi.default_value != 0.0 && sigma(i) > 0.5 * std::abs(f.p[i]);
+    if (partners.empty() && !loose) continue;
+    std::string m = "'" + pi.name + "' is weakly determined";
+    char buf[96];
+    std::snprintf(buf, sizeof buf, " (%.4g +- %.2g %s)", f.p[i], sigma(i), pi.unit.c_str());
+    m += buf;
+    if (!partners.empty()) m += ": it trades off against " + partners;
+    m += "; to separate them, hold one at a known value (--fix " + pi.name + "=VALUE)";
+    if (!pi.excitation.empty()) m += " or drive " + pi.excitation;
+    out.push_back(m);
+  }
+  return out;
+}
+
 namespace {
 
 // The starts of the multi-start: the guess, each parameter scaled (or shifted by its
 // default sigma when it is not a scale) by 0.2, 0.5, 2 and 5, and six random mixes.
 std::vector<Eigen::VectorXd> BaselineStarts(const System& sys, const Eigen::VectorXd& p0,
-                                            uint64_t seed) {
+                                            const std::vector<int>& fixed, uint64_t seed) {
   const int np = sys.num_params();
   std::vector<Eigen::VectorXd> starts = {p0};
   std::mt19937_64 rng(seed);
@@ -106,7 +178,9 @@ std::vector<Eigen::VectorXd> BaselineStarts(const System& sys, const Eigen::Vect
   auto is_scale = [&](int i) {
     return sys.params()[static_cast<size_t>(i)].default_value != 0.0 && p0[i] != 0.0;
   };
+  auto held = [&](int i) { return std::find(fixed.begin(), fixed.end(), i) != fixed.end(); };
   for (int i = 0; i < np; ++i) {
+    if (held(i)) continue;
     for (double f : {0.2, 0.5, 2.0, 5.0}) {
       Eigen::VectorXd s = p0;
       if (is_scale(i)) {
@@ -121,6 +195,7 @@ std::vector<Eigen::VectorXd> BaselineStarts(const System& sys, const Eigen::Vect
   for (int r = 0; r < 6; ++r) {
     Eigen::VectorXd s = p0;
     for (int i = 0; i < np; ++i) {
+      if (held(i)) continue;
       if (is_scale(i)) {
         s[i] *= std::exp(std::log(5.0) * unit(rng));
       } else {
@@ -190,13 +265,14 @@ std::vector<Fit> OkByCost(std::vector<Fit> fits) {
 Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
                 const AnalyzeOptions& o, FitReport* report) {
   const auto& u = d.rec->controls;
-  const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, o.seed);
+  const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, d.fixed, o.seed);
   // The starts in parallel, each solve on one thread: the result does not depend on the
   // thread count.
   if (o.progress) o.progress(0.05, "baseline: multi-start");
   std::vector<Fit> fits(starts.size());
-  ParallelFor(starts.size(), o.num_threads,
-              [&](size_t k) { fits[k] = RunFit(sys, u, d.short_meas, starts[k], false, 1, 40); });
+  ParallelFor(starts.size(), o.num_threads, [&](size_t k) {
+    fits[k] = RunFit(sys, u, d.short_meas, starts[k], d.fixed, false, 1, 40);
+  });
   const std::vector<Fit> stage1 = OkByCost(std::move(fits));
   if (stage1.empty())
     throw AnalysisError(
@@ -205,8 +281,9 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
   // Refine the best few distinct optima on the full windows (in parallel).
   const std::vector<const Fit*> seeds = DistinctSeeds(stage1);
   std::vector<Fit> tops(seeds.size());
-  ParallelFor(seeds.size(), o.num_threads,
-              [&](size_t k) { tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, true, 1); });
+  ParallelFor(seeds.size(), o.num_threads, [&](size_t k) {
+    tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, d.fixed, true, 1);
+  });
   const std::vector<Fit> refined = OkByCost(std::move(tops));
   if (refined.empty()) throw AnalysisError("baseline refinement failed");
   CheckUnique(sys, refined, report);

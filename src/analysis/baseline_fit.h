@@ -17,6 +17,7 @@ namespace kincal::analysis {
 
 struct Fit {
   Eigen::VectorXd p;
+  std::vector<int> fixed;  // parameters held at their start value
   Eigen::MatrixXd cov_robust, cov_model, info;
   double cost = 0.0;
   double n_eff = 0.0;  // effective number of independent residuals
@@ -24,14 +25,22 @@ struct Fit {
 };
 
 // One robust multiple-shooting fit from p0; ok = false when Ceres finds no finite solution.
+// `fixed` parameters stay at their value in p0.
 Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
-           const Eigen::VectorXd& p0, bool covariance, int threads, int max_iterations = 60);
+           const Eigen::VectorXd& p0, const std::vector<int>& fixed, bool covariance, int threads,
+           int max_iterations = 60);
 // Parameters [from, to) with their robust and model sigmas.
 std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, int to);
 // Parameters the information matrix cannot pin down, one sentence each.
 std::vector<std::string> Unobservable(const System& sys, const Fit& f);
 // The model's defaults with the user's --init values; throws AnalysisError on an unknown name.
 Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init);
+// The indices of the --fix parameters, their values set in *p0; throws AnalysisError on a
+// name that is not one of the model's parameters, or when every one of them is fixed.
+std::vector<int> FixParams(const System& sys, const std::map<std::string, double>& fixed,
+                           Eigen::VectorXd* p0);
+// Weakly determined parameters of a fit (FitReport::weak).
+std::vector<std::string> WeaklyDetermined(const System& sys, const Fit& f);
 // The bare model's fit; *report says whether the optimum was unique.
 Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
                 const AnalyzeOptions& o, FitReport* report);

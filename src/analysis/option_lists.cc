@@ -7,7 +7,9 @@
 
 namespace kincal {
 
-Status ParseInitList(std::string_view text, std::map<std::string, double>* out) {
+Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
+                     std::string_view option) {
+  const std::string opt(option);
   out->clear();
   size_t start = 0;
   while (start <= text.size()) {
@@ -17,17 +19,17 @@ Status ParseInitList(std::string_view text, std::map<std::string, double>* out) 
     if (item.empty()) continue;
     const size_t eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0) {
-      return Status::Error("--init: expected name=value, got '" + std::string(item) + "'");
+      return Status::Error(opt + ": expected name=value, got '" + std::string(item) + "'");
     }
     const std::string_view value = item.substr(eq + 1);
     double v = 0.0;
     const auto [end, ec] = std::from_chars(value.data(), value.data() + value.size(), v);
     if (ec != std::errc() || end != value.data() + value.size() || !std::isfinite(v)) {
-      return Status::Error("--init: '" + std::string(value) + "' is not a finite number (in '" +
+      return Status::Error(opt + ": '" + std::string(value) + "' is not a finite number (in '" +
                            std::string(item) + "')");
     }
     if (!out->emplace(std::string(item.substr(0, eq)), v).second) {
-      return Status::Error("--init: '" + std::string(item.substr(0, eq)) + "' is given twice");
+      return Status::Error(opt + ": '" + std::string(item.substr(0, eq)) + "' is given twice");
     }
   }
   return {};

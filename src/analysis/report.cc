@@ -36,6 +36,8 @@ json FitJson(const FitReport& f) {
   j["unique"] = f.unique;
   if (!f.uniqueness.empty()) j["uniqueness"] = f.uniqueness;
   j["unobservable"] = f.unobservable;
+  j["fixed"] = f.fixed;
+  j["weakly_determined"] = f.weak;
   return j;
 }
 
@@ -95,7 +97,18 @@ std::string Html(const AnalyzeResult& r) {
     }
     h << "</td><td>" << p.value << " ± " << p.sigma << "</td><td>" << p.unit << "</td></tr>";
   }
-  h << "</table><p>σ: cluster-robust over prediction windows (1σ).</p>";
+  h << "</table><p>σ: cluster-robust over prediction windows (1σ).";
+  if (!r.after.fixed.empty()) {
+    h << " Held at the given values (--fix), not fitted:";
+    for (const auto& f : r.after.fixed) h << " <b>" << f << "</b>";
+    h << ".";
+  }
+  h << "</p>";
+  if (!r.after.weak.empty()) {
+    h << "<p>Weakly determined:</p><ul>";
+    for (const auto& w : r.after.weak) h << "<li>" << w << "</li>";
+    h << "</ul>";
+  }
   h << "<img src='residuals_time.png'><img src='residuals_vs.png'>";
   h << "<h2>Candidate effects</h2><table><tr><th>round</th><th>effect</th><th>held-out gain</th>"
        "<th>ΔBIC</th><th>parameters</th><th>evidence</th></tr>";

@@ -36,6 +36,7 @@ struct Dataset {
   // ones confirmed on all (the fit windows themselves when there are too few).
   std::vector<PoseMeasurement> screen_meas;
   std::vector<RegressorValues> features;  // per eval window (regressors.h)
+  std::vector<int> fixed;                 // model parameters held (--fix), System indices
 };
 
 // Cuts the recording into windows; throws AnalysisError naming the recording when it is too

@@ -162,6 +162,10 @@ Status CheckMeasurements(std::span<const PoseMeasurement> meas) {
   return {};
 }
 
+bool IsFixed(const BatchOptions& options, int i) {
+  return std::find(options.fixed.begin(), options.fixed.end(), i) != options.fixed.end();
+}
+
 // Builds the problem from measurements that passed CheckMeasurements.
 void Build(const System& sys, const ControlSignal& controls, std::span<const PoseMeasurement> meas,
            const BatchOptions& options, Problem* pb) {
@@ -188,10 +192,14 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
   }
   if (options.prior)
     pb->problem.AddResidualBlock(new PriorCost(*options.prior), nullptr, pb->params.data());
-  // Physical bounds (lengths > 0, time constants >= 0).
+  if (!options.fixed.empty()) {
+    pb->problem.SetManifold(pb->params.data(),
+                            new ceres::SubsetManifold(sys.num_params(), options.fixed));
+  }
+  // Physical bounds (lengths > 0, time constants >= 0) of the free parameters.
   for (int i = 0; i < sys.num_params(); ++i) {
     const double lo = sys.params()[static_cast<size_t>(i)].min_value;
-    if (std::isfinite(lo)) {
+    if (std::isfinite(lo) && !IsFixed(options, i)) {
       pb->params[i] = std::max(pb->params[i], lo);
       pb->problem.SetParameterLowerBound(pb->params.data(), i, lo);
     }
@@ -230,6 +238,7 @@ void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchR
     const double* params[2] = {pb.starts[g].data(), pb.params.data()};
     double* jac[2] = {Jx.data(), Jp.data()};
     c->Evaluate(params, res.data(), jac);
+    for (int i : options.fixed) Jp.col(i).setZero();  // held: no information, no sigma
     sum_sq += res.squaredNorm();
     for (int i = 3; i < m; ++i) sum_lag += res[i] * res[i - 3];
     const Eigen::Matrix3d A = Jx.transpose() * Jx;
@@ -251,12 +260,20 @@ void ProfiledCovariance(Problem& pb, int np, const BatchOptions& options, BatchR
   r->effective_residuals =
       std::max(static_cast<double>(r->num_segments), rows_total * (1.0 - rho) / (1.0 + rho));
   // Invert in scaled coordinates (unit diagonal): parameters of very different units
-  // (ticks, metres per tick) must not look singular.
-  const Eigen::VectorXd d = H.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd Hs = d.asDiagonal() * H * d.asDiagonal();
+  // (ticks, metres per tick) must not look singular. A fixed parameter's row and column
+  // are zero: it is inverted as a unit and its variance set to zero after.
+  Eigen::MatrixXd Hf = H;
+  for (int i : options.fixed) {
+    Hf.row(i).setZero();
+    Hf.col(i).setZero();
+    Hf(i, i) = 1.0;
+  }
+  const Eigen::VectorXd d = Hf.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd Hs = d.asDiagonal() * Hf * d.asDiagonal();
   Eigen::FullPivLU<Eigen::MatrixXd> lu(Hs);
   if (!lu.isInvertible() || lu.rcond() < 1e-12) return;
-  const Eigen::MatrixXd Hi = d.asDiagonal() * lu.inverse() * d.asDiagonal();
+  Eigen::MatrixXd Hi = d.asDiagonal() * lu.inverse() * d.asDiagonal();
+  for (int i : options.fixed) Hi(i, i) = 0.0;
   r->profiled_covariance = 0.5 * (Hi + Hi.transpose());
   const double G = static_cast<double>(pb.costs.size());
   const double small_sample = G > 1.0 ? G / (G - 1.0) : 1.0;
@@ -277,6 +294,17 @@ bool BatchOptions::IsValid(const System& sys, std::string* error) const {
   }
   if (huber_scale < 0.0) {
     *error = "huber_scale must be >= 0";
+    return false;
+  }
+  std::vector<int> held = fixed;
+  std::sort(held.begin(), held.end());
+  if (std::adjacent_find(held.begin(), held.end()) != held.end() ||
+      (!held.empty() && (held.front() < 0 || held.back() >= sys.num_params()))) {
+    *error = "fixed parameters must be distinct indices below " + std::to_string(sys.num_params());
+    return false;
+  }
+  if (!held.empty() && held.size() == static_cast<size_t>(sys.num_params())) {
+    *error = "every parameter is fixed: nothing to fit";
     return false;
   }
   if (prior) {

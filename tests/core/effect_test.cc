@@ -67,8 +67,9 @@ TEST(Registry, OrderIsTheExplicitLists) {
             (std::vector<std::string>{"time_offset", "actuator_lag", "lever_arm", "yaw_rate_bias",
                                       "lateral_slip", "asymmetric_gain", "dead_band", "backlash",
                                       "effective_track", "turn_slowdown"}));
-  EXPECT_EQ(ModelRegistry::Instance().Names(),
-            (std::vector<std::string>{"diffdrive", "unicycle", "ackermann", "tricycle"}));
+  EXPECT_EQ(
+      ModelRegistry::Instance().Names(),
+      (std::vector<std::string>{"diffdrive", "unicycle", "ackermann", "tricycle", "bicycle"}));
   EXPECT_EQ(FilterRegistry::Instance().Names(), (std::vector<std::string>{"dd2", "ekf", "ukf"}));
   EXPECT_NE(EffectRegistry::Instance().Create("lever_arm"), nullptr);
   EXPECT_EQ(EffectRegistry::Instance().Create("lever"), nullptr);

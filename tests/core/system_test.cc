@@ -143,9 +143,9 @@ std::string ModelTestName(const ::testing::TestParamInfo<std::tuple<int, int>>& 
 }
 
 INSTANTIATE_TEST_SUITE_P(AllModels, ModelTest,
-                         ::testing::Combine(::testing::Range(0, 4), ::testing::Range(0, 3)),
+                         ::testing::Combine(::testing::Range(0, 5), ::testing::Range(0, 3)),
                          ModelTestName);
-INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 4),
+INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 5),
                          [](const ::testing::TestParamInfo<int>& info) {
                            return AllModelScenarios()[static_cast<size_t>(info.param)].model;
                          });

@@ -83,6 +83,43 @@ TEST(Batch, RecoversTheTruthWithin3SigmaFromAStart5PercentOff) {
   }
 }
 
+// A held parameter (a measured track width) stays where it was put, has no variance, and
+// the others are still fitted to the truth; the profiled and robust covariances agree.
+TEST(Batch, FixedParameterIsHeldAndHasNoVariance) {
+  const System sys = MakeSystem("diffdrive");
+  const auto sc = AllModelScenarios()[0];
+  const VecN<kMaxState> truth = testing::ToVec(sc.truth);
+  std::mt19937_64 rng(22);
+  const auto d = testing::Simulate(sys, truth, sc.lo, sc.hi, 20.0, 10.0,
+                                   Eigen::Vector3d(0.002, 0.002, 0.01), rng);
+  BatchOptions o;
+  o.fixed = {2};  // the track width, at its true value
+  o.profiled_covariance = true;
+  Eigen::VectorXd p0 = truth.cast<double>() * 1.05;
+  p0[2] = truth[2];
+  const BatchResult b = FitBatch(sys, d.controls, d.meas, p0, o);
+  ASSERT_TRUE(b.status.ok()) << b.status.message();
+  ASSERT_TRUE(b.covariance_ok);
+  EXPECT_EQ(b.params[2], truth[2]);
+  for (const Eigen::MatrixXd* c : {&b.covariance, &b.profiled_covariance, &b.robust_covariance}) {
+    ASSERT_EQ(c->rows(), 3);
+    EXPECT_EQ(c->row(2).norm(), 0.0);
+    EXPECT_EQ(c->col(2).norm(), 0.0);
+  }
+  for (int i = 0; i < 2; ++i) {
+    const double s = std::sqrt(b.covariance(i, i));
+    EXPECT_LT(std::abs(b.params[i] - truth[i]), 3.0 * s);
+    EXPECT_NEAR(std::sqrt(b.profiled_covariance(i, i)), s, 0.2 * s);
+  }
+  o.fixed = {0, 1, 2};
+  EXPECT_NE(FitBatch(sys, d.controls, d.meas, p0, o).status.message().find("every parameter"),
+            std::string::npos);
+  o.fixed = {1, 1};
+  EXPECT_FALSE(FitBatch(sys, d.controls, d.meas, p0, o).status.ok());
+  o.fixed = {3};
+  EXPECT_FALSE(FitBatch(sys, d.controls, d.meas, p0, o).status.ok());
+}
+
 // Bad data is a status naming the problem, never an exception (callers used to catch any
 // std::exception as "the fit failed").
 TEST(Batch, BadInputsAreStatusesThatSayWhatIsWrong) {

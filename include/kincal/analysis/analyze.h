@@ -38,8 +38,11 @@ class AnalysisError : public std::runtime_error {
 struct AnalyzeOptions {
   std::string model;
   std::map<std::string, double> init;  // initial guesses by parameter name
-  std::string effects_mode = "auto";   // "auto", "none" or "list"
-  std::vector<std::string> effects;    // candidate specs when effects_mode == "list"
+  // Model parameters held at a known value (--fix: a measured dimension), by name: not
+  // fitted, zero sigma, listed in the report.
+  std::map<std::string, double> fixed;
+  std::string effects_mode = "auto";  // "auto", "none" or "list"
+  std::vector<std::string> effects;   // candidate specs when effects_mode == "list"
   // Effects already in the model (the baseline is fitted with them; they are not
   // candidates). kincald's online search passes the effects it runs with.
   std::vector<std::string> base_effects;
@@ -90,6 +93,10 @@ struct FitReport {
   bool unique = true;
   std::string uniqueness;                 // explanation when not unique
   std::vector<std::string> unobservable;  // messages
+  std::vector<std::string> fixed;         // parameters held (--fix), "name=value"
+  // Weakly determined parameters (sigma above half the value, or correlated above 0.98
+  // with another): which trade off, and what would separate them. One sentence each.
+  std::vector<std::string> weak;
 };
 
 struct ResidualTests {

@@ -11,8 +11,10 @@
 
 namespace kincal {
 
-// "name=value,name=value" (--init): finite numbers by parameter name, each name once.
-Status ParseInitList(std::string_view text, std::map<std::string, double>* out);
+// "name=value,name=value" (--init, --fix): finite numbers by parameter name, each name
+// once. Errors name `option`.
+Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
+                     std::string_view option = "--init");
 // "effect,effect[ch1,ch2],..." (--effects): specs separated by commas outside brackets,
 // each a valid spec (ParseEffectSpec). Brackets must balance.
 Status ParseEffectList(std::string_view text, std::vector<std::string>* out);

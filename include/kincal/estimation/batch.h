@@ -54,6 +54,9 @@ struct BatchOptions {
   bool profiled_covariance = false;
   // Effect-state warm-up before each segment start (s); 0 = steady state at the start.
   double warmup_s = 2.0;
+  // Parameters (System indices) held at their value in params0: a measured dimension.
+  // Their rows and columns of every covariance and of the information are zero.
+  std::vector<int> fixed;
   bool IsValid(const System& sys, std::string* error) const;
 };
 

@@ -9,6 +9,7 @@ std::unique_ptr<KinematicModel> NewDiffDriveModel();
 std::unique_ptr<KinematicModel> NewUnicycleModel();
 std::unique_ptr<KinematicModel> NewAckermannModel();
 std::unique_ptr<KinematicModel> NewTricycleModel();
+std::unique_ptr<KinematicModel> NewBicycleModel();
 
 void RegisterBuiltins(Registry<KinematicModel>* registry) {
   for (auto* make : {
@@ -16,6 +17,7 @@ void RegisterBuiltins(Registry<KinematicModel>* registry) {
            &NewUnicycleModel,
            &NewAckermannModel,
            &NewTricycleModel,
+           &NewBicycleModel,
        }) {
     registry->Register(std::string(make()->name()), make);
   }
