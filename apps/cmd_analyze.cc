@@ -52,7 +52,8 @@ std::string Python() {
 }
 
 struct AnalyzeArgs {
-  std::string model, controls, poses, log, mrclam, out, init, fix, effects = "auto", pose_sigma;
+  std::string model, mrclam, out, init, fix, heldout_runs, effects = "auto", pose_sigma;
+  std::vector<std::string> controls, poses, log;  // repeated: one run (or more) each
   int robot = 0;
   AnalyzeOptions opt;
 };
@@ -72,6 +73,9 @@ AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
   if (const Status s = ParseInitList(a->fix, &o.fixed, "--fix"); !s.ok()) {
     throw std::runtime_error(s.message());
   }
+  if (const Status s = ParseRunList(a->heldout_runs, &o.heldout_runs); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
   if (a->effects == "auto" || a->effects == "none") {
     o.effects_mode = a->effects;
   } else {
@@ -86,25 +90,30 @@ AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
   return o;
 }
 
-// The recording from the one input the command line names.
+// The recording from the inputs the command line names: one kind of input, each
+// repeated --log (or --controls/--poses pair) one run or more, joined in the order given.
 Recording ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
   const auto model = MakeModel(o.model);
   const int sources =
       !a.mrclam.empty() + !a.log.empty() + (!a.controls.empty() || !a.poses.empty());
   if (sources != 1)
     throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
-  Recording rec;
+  std::vector<Recording> parts;
   if (!a.mrclam.empty()) {
     if (o.model != "unicycle")
       throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
-    rec = ReadMrclam(a.mrclam, a.robot);
+    parts.push_back(ReadMrclam(a.mrclam, a.robot));
   } else if (!a.log.empty()) {
-    rec = ReadLcmLog(a.log, *model);
+    for (const auto& log : a.log) parts.push_back(ReadLcmLog(log, *model));
   } else {
-    if (a.controls.empty() || a.poses.empty())
-      throw std::runtime_error("--controls and --poses go together");
-    rec = ReadCsvRecording(a.controls, a.poses, *model);
+    if (a.controls.size() != a.poses.size())
+      throw std::runtime_error(
+          "--controls and --poses go together: " + std::to_string(a.controls.size()) +
+          " --controls, " + std::to_string(a.poses.size()) + " --poses");
+    for (size_t k = 0; k < a.controls.size(); ++k)
+      parts.push_back(ReadCsvRecording(a.controls[k], a.poses[k], *model));
   }
+  Recording rec = JoinRuns(std::move(parts));
   std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
             << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
             << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
@@ -158,6 +167,17 @@ void PrintSummary(const AnalyzeResult& r, const std::string& out) {
   row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
   row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
       r.after.heldout.heading_rms_rad);
+  row("dead reckoning RMS [m]", r.heldout_dr_before.rms_m, r.heldout_dr_after.rms_m);
+  row("dead reckoning final [m]", r.heldout_dr_before.final_m, r.heldout_dr_after.final_m);
+  if (!r.runs.empty()) {
+    std::cout << std::right << "runs (position RMS at the horizon, dead reckoning final, m):\n";
+    for (const auto& x : r.runs) {
+      std::cout << "  run " << std::setw(3) << x.index << (x.heldout ? " held out " : " fit      ")
+                << std::setw(12) << x.before_pos_rms_m << " -> " << std::setw(12)
+                << x.after_pos_rms_m << "   " << std::setw(10) << x.dr_before.final_m << " -> "
+                << x.dr_after.final_m << "\n";
+    }
+  }
   std::cout << std::right << "parameters after:\n";
   for (const auto& p : r.after.params) {
     std::cout << "  " << std::left << std::setw(14) << p.name << std::right << std::setw(12)
@@ -188,9 +208,14 @@ void PrintSummary(const AnalyzeResult& r, const std::string& out) {
 Command AddAnalyze(CLI::App& app) {
   auto a = std::make_shared<AnalyzeArgs>();
   app.add_option("--model", a->model, "kinematic model (see `kincal models`)");
-  app.add_option("--controls", a->controls, "controls CSV: t,<control names>");
-  app.add_option("--poses", a->poses, "poses CSV: t,x,y,theta");
-  app.add_option("--log", a->log, "a kincald recording (LCM log) instead of CSV files");
+  app.add_option("--controls", a->controls,
+                 "controls CSV: t,<control names>[,run]; repeated with --poses: one run each");
+  app.add_option("--poses", a->poses, "poses CSV: t,x,y,theta[,run]");
+  app.add_option("--log", a->log,
+                 "a kincald recording or `kincal import` log (LCM) instead of CSV files; "
+                 "repeated: one run (or more) each");
+  app.add_option("--heldout-runs", a->heldout_runs,
+                 "runs held out (1-based, e.g. 3,6,9; default: every third run)");
   app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");
   app.add_option("--robot", a->robot, "MR.CLAM robot number");
   app.add_option("--out", a->out, "output directory")->required();

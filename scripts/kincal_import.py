@@ -9,7 +9,11 @@ read:
 
   controls  geometry_msgs/Twist, TwistStamped  -> kincal.controls_t (unicycle: v, omega)
             sensor_msgs/JointState             -> kincal.controls_t (diffdrive: omega_l,
-                                                  omega_r from the two named joints)
+                                                  omega_r from the two named joints: their
+                                                  velocities, or their positions (encoder
+                                                  angles) differenced when there are none)
+            ackermann_msgs/AckermannDriveStamped,
+            AckermannDrive                     -> kincal.controls_t (bicycle: v, steer)
   poses     geometry_msgs/PoseStamped, PoseWithCovarianceStamped, TransformStamped,
             tf2_msgs/TFMessage (one child frame), nav_msgs/Odometry -> kincal.pose_t
   frames    sensor_msgs/Image (mono8, bgr8, rgb8, yuv422, yuv422_yuy2) and
@@ -17,7 +21,17 @@ read:
   camera    sensor_msgs/CameraInfo (plumb_bob) -> the intrinsics file `kincal` reads
 
 Stamps: the message header's stamp where the type has one and it is set, otherwise the
-bag's receive time; `--stamps` forces one. The summary says which was used per topic.
+bag's receive time; `--stamps` forces one. The summary says which was used per topic. Two
+clocks: when the controls' and the poses' header stamps differ from their receive times by
+amounts more than 1 s apart (a robot computer stamping commands on its own clock, the
+motion capture on another), both streams use their receive times (one machine received
+them) and the summary says so with both offsets.
+
+Several bags (`kincal import A.bag B.bag ...`, or a folder of bags): each bag is one run of
+one recording, in the order given (a folder's bags by name), its start marked by a
+kincal.run_t on KINCAL_RUN. A bag that starts before the previous one ends (each on its own
+clock) is moved to start 1 s after it, and the summary says so. Every bag must have the
+requested topics with the same types.
 """
 
 import argparse
@@ -28,11 +42,27 @@ import tempfile
 import time
 from pathlib import Path
 
+ACKERMANN_TYPES = {"ackermann_msgs/msg/AckermannDriveStamped", "ackermann_msgs/msg/AckermannDrive"}
 CONTROL_TYPES = {
     "geometry_msgs/msg/Twist",
     "geometry_msgs/msg/TwistStamped",
     "sensor_msgs/msg/JointState",
+} | ACKERMANN_TYPES
+# ackermann_msgs (the ROS interface every car-like robot is driven by), for bags that do
+# not carry their message definitions (ROS 2 bags before Iron).
+ACKERMANN_MSGS = {
+    "ackermann_msgs/msg/AckermannDrive": "float32 steering_angle\nfloat32 steering_angle_velocity\n"
+    "float32 speed\nfloat32 acceleration\nfloat32 jerk\n",
+    "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\nackermann_msgs/AckermannDrive drive\n",
 }
+MODEL_CONTROLS = {
+    "diffdrive": ({"sensor_msgs/msg/JointState"}, ["omega_l", "omega_r"]),
+    "unicycle": ({"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}, ["v", "omega"]),
+    "bicycle": (ACKERMANN_TYPES, ["v", "steer"]),
+}
+RUN_CHANNEL = "KINCAL_RUN"
+RUN_GAP_NS = 1_000_000_000  # a bag that would start earlier is moved to this after the last
+CLOCKS_APART_NS = 1_000_000_000  # header-minus-receive offsets further apart: two clocks
 POSE_TYPES = {
     "geometry_msgs/msg/PoseStamped",
     "geometry_msgs/msg/PoseWithCovarianceStamped",
@@ -56,9 +86,34 @@ def fail(msg):
 # --- bag access -------------------------------------------------------------------------
 
 
+def typestore():
+    from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    extra = {}
+    for name, text in ACKERMANN_MSGS.items():
+        extra.update(get_types_from_msg(text, name))
+    store.register(extra)
+    return store
+
+
+def bag_paths(paths):
+    """The bags named: files and ROS 2 bag folders as given, a folder of bags by name."""
+    out = []
+    for path in paths:
+        p = Path(path)
+        if p.is_dir() and not (p / "metadata.yaml").exists():
+            inner = sorted(q for q in p.iterdir() if q.suffix == ".bag" or (q / "metadata.yaml").exists())
+            if not inner:
+                fail(f"{path}: a folder with neither metadata.yaml (a ROS 2 bag) nor bags in it")
+            out += [str(q) for q in inner]
+        else:
+            out.append(path)
+    return out
+
+
 def open_bag(path):
     from rosbags.highlevel import AnyReader
-    from rosbags.typesys import Stores, get_typestore
 
     p = Path(path)
     if not p.exists():
@@ -68,7 +123,7 @@ def open_bag(path):
     if p.is_file() and p.suffix != ".bag":
         fail(f"{path}: expected a ROS 1 .bag file or a ROS 2 bag folder")
     # Bags without embedded definitions (some ROS 2 bags) use the standard types.
-    return AnyReader([p], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+    return AnyReader([p], default_typestore=typestore())
 
 
 def topics_of(reader):
@@ -101,7 +156,10 @@ def suggest(topics):
             by_type.setdefault(typ, []).append(t)
     joints = by_type.get("sensor_msgs/msg/JointState")
     twists = by_type.get("geometry_msgs/msg/TwistStamped") or by_type.get("geometry_msgs/msg/Twist")
-    if joints:
+    cars = by_type.get("ackermann_msgs/msg/AckermannDriveStamped") or by_type.get("ackermann_msgs/msg/AckermannDrive")
+    if cars:
+        args += ["--model bicycle", f"--controls {cars[0]}"]
+    elif joints:
         args += ["--model diffdrive", f"--controls {joints[0]}", "--joints LEFT,RIGHT"]
     elif twists:
         args += ["--model unicycle", f"--controls {twists[0]}"]
@@ -175,19 +233,30 @@ def pose_of(msg, typ, args, where, tilt):
     return float(p.x), float(p.y), theta, cov, msg
 
 
+def joint_values(msg, field, joints, where):
+    """The named joints' velocities or positions (`field`) from a JointState."""
+    names = list(msg.name)
+    values = list(getattr(msg, field))
+    if len(values) != len(names):
+        fail(f"{where}: {len(names)} joint names but {len(values)} {field} values (--joint-field {field})")
+    out = []
+    for j in joints:
+        if j not in names:
+            fail(f"{where}: joint '{j}' not in the message (it has {', '.join(names)})")
+        out.append(float(values[names.index(j)]))
+    return out
+
+
 def controls_of(msg, typ, args, where):
-    """The model's control values, in the model's order."""
+    """The model's control values, in the model's order (JointState positions: see
+    EncoderRates)."""
     if typ == "sensor_msgs/msg/JointState":
-        names = list(msg.name)
-        vel = list(msg.velocity)
-        if len(vel) != len(names):
-            fail(f"{where}: {len(names)} joint names but {len(vel)} velocities")
-        values = []
-        for j in args.joint_names:
-            if j not in names:
-                fail(f"{where}: joint '{j}' not in the message (it has {', '.join(names)})")
-            values.append(float(vel[names.index(j)]))
-        return values
+        if args.joint_field is None:  # velocities when the driver publishes them
+            args.joint_field = "velocity" if len(msg.velocity) > 0 else "position"
+        return joint_values(msg, args.joint_field, args.joint_names, where)
+    if typ in ACKERMANN_TYPES:
+        drive = msg.drive if typ == "ackermann_msgs/msg/AckermannDriveStamped" else msg
+        return [float(drive.speed), float(drive.steering_angle)]
     twist = msg.twist if typ == "geometry_msgs/msg/TwistStamped" else msg
     return [float(twist.linear.x), float(twist.angular.z)]
 
@@ -299,10 +368,10 @@ def import_types(path):
 
     use_lcm_types(path)
     try:
-        from kincal import controls_t, frame_t, pose_t  # noqa: F401
+        from kincal import controls_t, frame_t, pose_t, run_t  # noqa: F401
     except ImportError as e:
         fail(f"cannot import the kincal LCM types ({e}); pass --lcm-types DIR (build/lcmgen/python)")
-    return controls_t, pose_t, frame_t
+    return controls_t, pose_t, frame_t, run_t
 
 
 class Stream:
@@ -313,6 +382,7 @@ class Stream:
         self.policy = None  # "header" or "receive", fixed by the first message
         self.last_ns = None
         self.written = 0
+        self.encoder = None  # JointState positions: EncoderRates
 
     def stamp(self, msg, receive_ns, forced, index):
         where = f"topic {self.topic}, message {index}"
@@ -360,7 +430,7 @@ def check_args(args):
     if not (args.controls or args.poses or args.images):
         fail("nothing to import: give --controls, --poses and/or --images (see --list)")
     if args.controls and not args.model:
-        fail("--controls needs --model (diffdrive with JointState, unicycle with Twist)")
+        fail("--controls needs --model (diffdrive with JointState, unicycle with Twist, bicycle with AckermannDrive)")
     if args.model == "diffdrive":
         args.joint_names = [j for j in (args.joints or "").split(",") if j]
         if len(args.joint_names) != 2:
@@ -372,26 +442,72 @@ def check_args(args):
 
 
 def check_model_type(stream, model):
-    want = {"diffdrive": {"sensor_msgs/msg/JointState"}, "unicycle": {"geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped"}}
-    if model not in want:
-        fail(f"--model {model}: import reads controls for diffdrive (JointState) or unicycle (Twist)")
-    if stream.type not in want[model]:
-        fail(f"topic {stream.topic}: {stream.type} are not {model} controls; expected {' or '.join(sorted(want[model]))}")
+    if model not in MODEL_CONTROLS:
+        fail(
+            f"--model {model}: import reads controls for diffdrive (JointState), unicycle (Twist) "
+            "or bicycle (AckermannDriveStamped, AckermannDrive)"
+        )
+    want = MODEL_CONTROLS[model][0]
+    if stream.type not in want:
+        fail(f"topic {stream.topic}: {stream.type} are not {model} controls; expected {' or '.join(sorted(want))}")
+
+
+class EncoderRates:
+    """Wheel rates from encoder angles (JointState positions): the rate over each interval
+    is its angle difference over its duration (exact for the increment), held from the
+    interval's start as every control is; a continuous joint's wrap at +-pi is unwrapped."""
+
+    def __init__(self):
+        self.prev = None  # (utime, sender_utime, positions)
+        self.last_rates = None
+
+    def add(self, utime, sender_utime, positions, where):
+        out = None
+        if self.prev is not None:
+            t0, s0, p0 = self.prev
+            dt = (utime - t0) * 1e-6
+            if dt <= 0:
+                fail(f"{where}: encoder positions at a repeated time; rates need increasing stamps")
+            rates = [math.remainder(b - a, 2 * math.pi) / dt if abs(b - a) > math.pi else (b - a) / dt for a, b in zip(p0, positions)]
+            out = (t0, s0, rates)
+            self.last_rates = rates
+        self.prev = (utime, sender_utime, positions)
+        return out
+
+    def finish(self):
+        """The last sample holds the last interval's rate to the end."""
+        if self.prev is None or self.last_rates is None:
+            return None
+        return (self.prev[0], self.prev[1], self.last_rates)
 
 
 class Writer:
-    """kincal LCM messages into an event log."""
+    """kincal LCM messages into an event log; each bag's times moved by `shift_us`."""
 
     def __init__(self, log, types, model):
         self.log, self.model = log, model
-        self.controls_t, self.pose_t, self.frame_t = types
-        self.names = {"diffdrive": ["omega_l", "omega_r"], "unicycle": ["v", "omega"]}.get(model, [])
+        self.controls_t, self.pose_t, self.frame_t, self.run_t = types
+        self.names = MODEL_CONTROLS.get(model, (None, []))[1]
+        self.shift_us = 0
+        self.last_utime = None
+
+    def run(self, utime, index, source):
+        m = self.run_t()
+        m.schema_version, m.utime, m.index, m.source = 1, utime, index, source
+        self.log.write_event(utime, RUN_CHANNEL, m.encode())
+
+    def event(self, utime, channel, data):
+        utime += self.shift_us
+        self.last_utime = utime if self.last_utime is None else max(self.last_utime, utime)
+        self.log.write_event(utime, channel, data)
+        return utime
 
     def controls(self, utime, sender_utime, values):
         m = self.controls_t()
         m.schema_version, m.utime, m.sender_utime, m.model = 1, utime, sender_utime, self.model
         m.num_controls, m.names, m.values = len(values), self.names, values
-        self.log.write_event(utime, CONTROLS_CHANNEL, m.encode())
+        m.utime = utime + self.shift_us
+        self.event(utime, CONTROLS_CHANNEL, m.encode())
 
     def pose(self, utime, x, y, theta, cov):
         m = self.pose_t()
@@ -399,14 +515,16 @@ class Writer:
         m.x, m.y, m.theta = x, y, theta
         m.covariance = cov if cov else [0.0] * 9
         m.reprojection_rms_px, m.valid = 0.0, 1
-        self.log.write_event(utime, POSE_CHANNEL, m.encode())
+        m.utime = m.source_utime = utime + self.shift_us
+        self.event(utime, POSE_CHANNEL, m.encode())
 
     def frame(self, utime, seq, w, h, stride, fmt, data):
         m = self.frame_t()
         m.schema_version, m.utime, m.device_utime, m.sequence = 1, utime, utime, seq
         m.width, m.height, m.stride, m.pixel_format = w, h, stride, fmt
         m.size, m.data = len(data), data
-        self.log.write_event(utime, FRAME_CHANNEL, m.encode())
+        m.utime = m.device_utime = utime + self.shift_us
+        self.event(utime, FRAME_CHANNEL, m.encode())
 
 
 def convert(reader, streams, args, writer, tilt):
@@ -450,11 +568,82 @@ def one(s, msg, receive_ns, args, writer, tilt, where, i):
             fail(f"{where}: controls are not finite ({values})")
         utime = s.stamp(msg, receive_ns, args.stamps, i) // 1000
         header = stamp_ns(msg)
-        writer.controls(utime, header // 1000 if header else 0, values)
+        sender = header // 1000 if header else 0
+        if s.type == "sensor_msgs/msg/JointState" and args.joint_field == "position":
+            s.encoder = s.encoder or EncoderRates()
+            got = s.encoder.add(utime, sender, values, where)
+            if got is not None:
+                writer.controls(*got)
+        else:
+            writer.controls(utime, sender, values)
     else:
         utime = s.stamp(msg, receive_ns, args.stamps, i) // 1000
         writer.frame(utime, i - 1, *frame_of(msg, s.type, where))
     s.written += 1
+
+
+def first_messages(reader, streams, limit=200):
+    """{topic: [(header_ns or None, receive_ns), ...]}: the first `limit` controls and poses."""
+    wanted = {t for t, s in streams.items() if s.role in ("controls", "poses")}
+    seen = {t: [] for t in wanted}
+    conns = [c for c in reader.connections if c.topic in wanted]
+    for conn, receive_ns, raw in reader.messages(connections=conns):
+        if len(seen[conn.topic]) >= limit:
+            if all(len(v) >= limit for v in seen.values()):
+                break
+            continue
+        try:
+            msg = reader.deserialize(raw, conn.msgtype)
+        except Exception:  # the conversion names the damaged message
+            break
+        if streams[conn.topic].type == "tf2_msgs/msg/TFMessage":
+            got = pose_of(msg, "tf2_msgs/msg/TFMessage", ARGS_FOR_TF[0], "", TiltStats(math.pi))
+            header = stamp_ns(got[4]) if got else None
+        else:
+            header = stamp_ns(msg)
+        seen[conn.topic].append((header, receive_ns))
+    return seen
+
+
+ARGS_FOR_TF = [None]  # the arguments, for reading a tf message's stamp in the first pass
+
+
+def check_clocks(streams, seen, args, notes):
+    """Two clocks: header stamps offset from the receive times by amounts more than 1 s
+    apart between controls and poses. With --stamps auto both then use receive times."""
+    offsets = {}
+    for topic, pairs in seen.items():
+        diffs = sorted(h - r for h, r in pairs if h is not None)
+        if diffs and len(diffs) == len(pairs):
+            offsets[topic] = diffs[len(diffs) // 2]
+    roles = {streams[t].role: t for t in offsets}
+    if "controls" not in roles or "poses" not in roles:
+        return
+    oc, op = offsets[roles["controls"]], offsets[roles["poses"]]
+    if abs(oc - op) <= CLOCKS_APART_NS:
+        return
+    said = (
+        f"two clocks: the header stamps of {roles['controls']} are {oc * 1e-9:+.3f} s from their receive "
+        f"times, those of {roles['poses']} {op * 1e-9:+.3f} s"
+    )
+    if args.stamps == "auto":
+        for t in seen:
+            streams[t].policy = "receive"
+        notes.append(said + ": both use their receive times (one machine received both)")
+    else:
+        notes.append(said + f": --stamps {args.stamps} keeps them as asked")
+
+
+def bag_start_ns(streams, seen, args):
+    """The earliest stamp of the bag's controls and poses under each stream's policy."""
+    starts = []
+    for topic, pairs in seen.items():
+        if not pairs:
+            continue
+        h, r = pairs[0]
+        policy = streams[topic].policy or (args.stamps if args.stamps != "auto" else ("header" if h else "receive"))
+        starts.append(h if policy == "header" and h else r)
+    return min(starts) if starts else None
 
 
 def summarise(streams, tilt, args):
@@ -473,48 +662,101 @@ def summarise(streams, tilt, args):
         )
 
 
-def run(args):
-    import lcm
+def same_streams(first, streams, bag):
+    """Every bag of one import has the first bag's topics with the same types."""
+    for t, s in first.items():
+        if t not in streams or streams[t].type != s.type:
+            got = streams[t].type if t in streams else "no such topic"
+            fail(f"{bag}: topic {t} is {got}, the first bag's is {s.type}: bags of one robot expected")
 
-    if args.list:
-        with open_bag(args.bag) as reader:
-            list_bag(reader)
-        return
-    check_args(args)
-    types = import_types(args.lcm_types)
-    tilt = TiltStats(math.radians(args.max_tilt_deg))
-    out = os.path.abspath(args.out)
-    if os.path.islink(out):
-        fail(f"{args.out}: is a symbolic link; kincal never writes through one")
-    with open_bag(args.bag) as reader:
+
+def import_bag(bag, index, args, writer, tilt, first, notes):
+    """One bag as run `index` of the log; returns its streams."""
+    with open_bag(bag) as reader:
         streams = select_streams(reader, args)
         for s in streams.values():
             if s.role == "controls":
                 check_model_type(s, args.model)
             if s.role == "poses" and s.type == "tf2_msgs/msg/TFMessage" and not args.tf_frame:
                 fail(f"topic {s.topic}: tf needs --tf-frame CHILD (the tracked body's frame)")
-        fd, tmp = tempfile.mkstemp(prefix=".kincal_import.", suffix=".lcm", dir=os.path.dirname(out))
-        os.close(fd)
-        try:
-            log = lcm.EventLog(tmp, "w", overwrite=True)
-            convert(reader, streams, args, Writer(log, types, args.model), tilt)
-            log.close()
-            print(f"kincal import: {args.bag} -> {args.out}")
-            summarise(streams, tilt, args)
-            os.replace(tmp, out)
-        except BaseException:
-            os.unlink(tmp)
-            raise
+        if first is not None:
+            same_streams(first, streams, bag)
+        seen = first_messages(reader, streams)
+        check_clocks(streams, seen, args, notes)
+        start = bag_start_ns(streams, seen, args)
+        if args.multi and start is not None:
+            start_us = start // 1000
+            writer.shift_us = 0
+            if writer.last_utime is not None and start_us < writer.last_utime + RUN_GAP_NS // 1000:
+                writer.shift_us = writer.last_utime + RUN_GAP_NS // 1000 - start_us
+                notes.append(
+                    f"{bag}: starts {writer.shift_us * 1e-6:.3f} s too early to follow the previous bag "
+                    "(its own clock, or out of order): moved to start 1 s after it"
+                )
+            writer.run(start_us + writer.shift_us, index, bag)
+        convert(reader, streams, args, writer, tilt)
+        for st in streams.values():
+            if st.encoder is not None and (last := st.encoder.finish()) is not None:
+                writer.controls(*last)
+            st.encoder = None
+    return streams
+
+
+def run(args):
+    import lcm
+
+    if args.list:
+        for bag in bag_paths(args.bag):
+            with open_bag(bag) as reader:
+                if len(args.bag) > 1 or bag != args.bag[0]:
+                    print(f"{bag}:")
+                list_bag(reader)
+        return
+    check_args(args)
+    bags = bag_paths(args.bag)
+    args.multi = len(bags) > 1
+    ARGS_FOR_TF[0] = args
+    types = import_types(args.lcm_types)
+    tilt = TiltStats(math.radians(args.max_tilt_deg))
+    out = os.path.abspath(args.out)
+    if os.path.islink(out):
+        fail(f"{args.out}: is a symbolic link; kincal never writes through one")
+    fd, tmp = tempfile.mkstemp(prefix=".kincal_import.", suffix=".lcm", dir=os.path.dirname(out))
+    os.close(fd)
+    try:
+        log = lcm.EventLog(tmp, "w", overwrite=True)
+        writer, first, notes, totals = Writer(log, types, args.model), None, [], {}
+        for i, bag in enumerate(bags):
+            streams = import_bag(bag, i, args, writer, tilt, first, notes)
+            first = first or streams
+            for t, st in streams.items():
+                if t in totals:
+                    totals[t].written += st.written
+                else:
+                    totals[t] = st
+        log.close()
+        what = f"{len(bags)} bags (one run each)" if args.multi else bags[0]
+        print(f"kincal import: {what} -> {args.out}")
+        summarise(totals, tilt, args)
+        for n in notes:
+            print(f"kincal import: note: {n}")
+        os.replace(tmp, out)
+    except BaseException:
+        os.unlink(tmp)
+        raise
 
 
 def parse(argv):
     ap = argparse.ArgumentParser(prog="kincal import", description=__doc__.splitlines()[0])
-    ap.add_argument("bag", help="ROS 1 .bag file or ROS 2 bag folder")
+    ap.add_argument("bag", nargs="+", help="ROS 1 .bag files, ROS 2 bag folders, or a folder of bags: one run each")
     ap.add_argument("--list", action="store_true", help="list topics, types, counts, rates; suggest a mapping")
     ap.add_argument("--out", help="the LCM log to write")
-    ap.add_argument("--model", help="diffdrive (JointState controls) or unicycle (Twist controls)")
+    ap.add_argument("--model", help="diffdrive (JointState controls), unicycle (Twist) or bicycle (AckermannDrive)")
     ap.add_argument("--controls", help="controls topic")
     ap.add_argument("--joints", help="diffdrive: LEFT,RIGHT wheel joint names in the JointState")
+    ap.add_argument("--joint-field", choices=("velocity", "position"),
+                    help="JointState field the wheel rates come from (default: velocity when published, "
+                    "else position: encoder angles differenced over each interval)")
     ap.add_argument("--poses", help="measured pose topic (PoseStamped, PoseWithCovarianceStamped, TransformStamped, tf, Odometry)")
     ap.add_argument("--tf-frame", help="with tf poses: the tracked body's child frame")
     ap.add_argument("--images", help="camera frames topic (Image or CompressedImage)")
@@ -535,7 +777,7 @@ def main(argv=None):
         print(f"kincal import: error: {e}", file=sys.stderr)
         return 1
     except Exception as e:  # the bag library's own errors: name the bag
-        print(f"kincal import: error: {args.bag}: {type(e).__name__}: {e}", file=sys.stderr)
+        print(f"kincal import: error: {' '.join(args.bag)}: {type(e).__name__}: {e}", file=sys.stderr)
         return 1
     return 0
 

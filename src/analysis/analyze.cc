@@ -12,6 +12,7 @@
 #include "analysis/evaluation.h"
 #include "analysis/parallel.h"
 #include "analysis/regressors.h"
+#include "analysis/runs.h"
 #include "analysis/selection.h"
 #include "analysis/windows.h"
 #include "kincal/system.h"
@@ -33,7 +34,7 @@ double CommandedFraction(const analysis::Dataset& d) {
   int commanded = 0, n = 0;
   for (const auto& w : d.eval) {
     const double ts = d.t[static_cast<size_t>(w.start)];
-    if (ts < d.t_split) continue;
+    if (!d.HeldOutAt(ts)) continue;
     const auto& u = d.rec->controls.At(ts);
     commanded += std::any_of(u.begin(), u.begin() + d.rec->controls.num_channels(),
                              [](double v) { return v != 0.0; });
@@ -199,6 +200,15 @@ std::vector<Tried> RunRound(int round, const std::vector<std::string>& candidate
   return out;
 }
 
+// Run by run, and dead reckoning over the held-out part, before and after.
+void JudgeRuns(const Dataset& d, const System& bare, const SelectionState& before,
+               const System& final_sys, const SelectionState& after, AnalyzeResult* res) {
+  res->runs =
+      analysis::PerRun(d, before.eval, after.eval, bare, before.fit.p, final_sys, after.fit.p);
+  res->heldout_dr_before = analysis::HeldOutDeadReckoning(bare, before.fit.p, d);
+  res->heldout_dr_after = analysis::HeldOutDeadReckoning(final_sys, after.fit.p, d);
+}
+
 // The model and the effects already in it (o.base_effects); an error names the spec.
 void MakeBaseModel(const AnalyzeOptions& o, std::shared_ptr<const KinematicModel>* model,
                    std::vector<std::shared_ptr<const Effect>>* base_effects) {
@@ -269,7 +279,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
   const std::vector<int> fixed = analysis::FixParams(bare, o.fixed, &p0);
   Dataset d = analysis::Prepare(rec, o, &res.warnings);
-  d.fixed = fixed;
+  d.limits.fixed = fixed;
   res.pose_sigma = d.sigma;
   res.pose_sigma_estimated = !o.pose_sigma.has_value();
   res.t_begin_s = std::max(d.t.front(), d.t_ctrl0);
@@ -298,6 +308,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.residual_steps.push_back({"before", current.eval.points});
   current.diagnosis = res.diagnosis_before;
   current.effects = base_effects;
+  const SelectionState baseline = current;
 
   // 2. Selection: each round screens every candidate on top of what was accepted, then
   // confirms the leading ones on all windows.
@@ -308,6 +319,7 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.diagnosis_after = current.diagnosis;
   res.tests_after = analysis::TestResiduals(current.eval, o.horizon_s);
   res.goodness = Judge(d, res.after.heldout.pos_rms_m);
+  JudgeRuns(d, bare, baseline, final_sys, current, &res);
   if (res.goodness.judged && !res.goodness.explains) {
     res.warnings.push_back(res.goodness.verdict);
     for (FitReport* f : {&res.before, &res.after}) {

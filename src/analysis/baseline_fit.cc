@@ -12,16 +12,17 @@
 namespace kincal::analysis {
 
 Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
-           const Eigen::VectorXd& p0, const std::vector<int>& fixed, bool covariance, int threads,
+           const Eigen::VectorXd& p0, const FitLimits& limits, bool covariance, int threads,
            int max_iterations) {
   BatchOptions o;
-  o.fixed = fixed;
+  o.fixed = limits.fixed;
+  o.run_starts = limits.run_starts;
   o.compute_covariance = false;
   o.profiled_covariance = covariance;
   o.max_iterations = max_iterations;
   o.num_threads = threads;
   Fit f;
-  f.fixed = fixed;
+  f.fixed = limits.fixed;
   const BatchResult r = FitBatch(sys, u, meas, p0, o);
   if (!r.status.ok()) return f;  // not ok: the caller tries another start or candidate
   f.p = r.params;
@@ -265,13 +266,13 @@ std::vector<Fit> OkByCost(std::vector<Fit> fits) {
 Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
                 const AnalyzeOptions& o, FitReport* report) {
   const auto& u = d.rec->controls;
-  const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, d.fixed, o.seed);
+  const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, d.limits.fixed, o.seed);
   // The starts in parallel, each solve on one thread: the result does not depend on the
   // thread count.
   if (o.progress) o.progress(0.05, "baseline: multi-start");
   std::vector<Fit> fits(starts.size());
   ParallelFor(starts.size(), o.num_threads, [&](size_t k) {
-    fits[k] = RunFit(sys, u, d.short_meas, starts[k], d.fixed, false, 1, 40);
+    fits[k] = RunFit(sys, u, d.short_meas, starts[k], d.limits, false, 1, 40);
   });
   const std::vector<Fit> stage1 = OkByCost(std::move(fits));
   if (stage1.empty())
@@ -282,7 +283,7 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
   const std::vector<const Fit*> seeds = DistinctSeeds(stage1);
   std::vector<Fit> tops(seeds.size());
   ParallelFor(seeds.size(), o.num_threads, [&](size_t k) {
-    tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, d.fixed, true, 1);
+    tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, d.limits, true, 1);
   });
   const std::vector<Fit> refined = OkByCost(std::move(tops));
   if (refined.empty()) throw AnalysisError("baseline refinement failed");

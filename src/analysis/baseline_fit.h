@@ -25,9 +25,9 @@ struct Fit {
 };
 
 // One robust multiple-shooting fit from p0; ok = false when Ceres finds no finite solution.
-// `fixed` parameters stay at their value in p0.
+// Held parameters (limits.fixed) stay at their value in p0.
 Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeasurement>& meas,
-           const Eigen::VectorXd& p0, const std::vector<int>& fixed, bool covariance, int threads,
+           const Eigen::VectorXd& p0, const FitLimits& limits, bool covariance, int threads,
            int max_iterations = 60);
 // Parameters [from, to) with their robust and model sigmas.
 std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, int to);

@@ -11,13 +11,20 @@ namespace kincal::analysis {
 Evaluation Evaluate(const System& sys, const Eigen::VectorXd& p, const Dataset& d) {
   const auto& u = d.rec->controls;
   const int n = sys.state_dim();
-  // Effect states along the recording (they depend on commands and parameters only).
+  // Effect states along the recording (they depend on commands and parameters only),
+  // at rest again at each run's start.
   std::vector<StateVec> states;
   if (sys.num_states() > 0) {
     StateVec x = sys.MakeState(0, 0, 0, p, u, d.t_ctrl0);
     double t = d.t_ctrl0;
+    int run = 0;
     for (const auto& w : d.eval) {
       const double ts = d.t[static_cast<size_t>(w.start)];
+      if (d.by_runs && d.run[static_cast<size_t>(w.start)] != run) {
+        run = d.run[static_cast<size_t>(w.start)];
+        t = std::max(d.t_ctrl0, d.run_start_s[static_cast<size_t>(run)]);
+        x = sys.MakeState(0, 0, 0, p, u, t);
+      }
       if (ts > t) {
         sys.AdvanceEffectStates(x.data(), t, ts, u);
         t = ts;
@@ -44,7 +51,7 @@ Evaluation Evaluate(const System& sys, const Eigen::VectorXd& p, const Dataset& 
     const double ex = ze.x() - zp[0], ey = ze.y() - zp[1];
     const double c = std::cos(ze.z()), s = std::sin(ze.z());
     ResidualPoint r{d.t[static_cast<size_t>(w.start)],
-                    d.t[static_cast<size_t>(w.start)] >= d.t_split, c * ex + s * ey,
+                    d.HeldOutAt(d.t[static_cast<size_t>(w.start)]), c * ex + s * ey,
                     -s * ex + c * ey, WrapAngle(ze.z() - zp[2])};
     const int h = r.heldout ? 1 : 0;
     sp[h] += r.along * r.along + r.cross * r.cross;
@@ -62,11 +69,13 @@ void NaiveHeldOut(const Dataset& d, double* standstill_m, double* constant_veloc
   int n = 0;
   for (const auto& w : d.eval) {
     const double ts = d.t[static_cast<size_t>(w.start)], te = d.t[static_cast<size_t>(w.end)];
-    if (ts < d.t_split) continue;
+    if (!d.HeldOutAt(ts)) continue;
     // The pose about one horizon earlier: the velocity over the previous horizon.
     const auto prev = std::lower_bound(d.t.begin(), d.t.begin() + w.start, ts - d.horizon);
     const int k = static_cast<int>(prev - d.t.begin());
-    if (k >= w.start) continue;
+    if (k >= w.start ||
+        (d.by_runs && d.run[static_cast<size_t>(k)] != d.run[static_cast<size_t>(w.start)]))
+      continue;
     const Eigen::Vector2d zs = d.rec->poses[static_cast<size_t>(w.start)].z.head<2>();
     const Eigen::Vector2d ze = d.rec->poses[static_cast<size_t>(w.end)].z.head<2>();
     const Eigen::Vector2d zk = d.rec->poses[static_cast<size_t>(k)].z.head<2>();

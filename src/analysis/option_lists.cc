@@ -1,5 +1,6 @@
 #include "kincal/analysis/option_lists.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -31,6 +32,28 @@ Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
     if (!out->emplace(std::string(item.substr(0, eq)), v).second) {
       return Status::Error(opt + ": '" + std::string(item.substr(0, eq)) + "' is given twice");
     }
+  }
+  return {};
+}
+
+Status ParseRunList(std::string_view text, std::vector<int>* out) {
+  out->clear();
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string_view item = text.substr(start, comma - start);
+    start = comma + 1;
+    if (item.empty()) continue;
+    int v = 0;
+    const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
+    if (ec != std::errc() || end != item.data() + item.size() || v < 1) {
+      return Status::Error("--heldout-runs: '" + std::string(item) +
+                           "' is not a run number (1, 2, ...)");
+    }
+    if (std::find(out->begin(), out->end(), v) != out->end()) {
+      return Status::Error("--heldout-runs: run " + std::string(item) + " is given twice");
+    }
+    out->push_back(v);
   }
   return {};
 }

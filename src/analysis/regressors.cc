@@ -103,10 +103,12 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
   const double dt = kLagStepS, half = kLagHalfS;
   std::vector<double> vm, wm, tgrid;
   for (double t = std::max(d.t.front(), d.t_ctrl0) + half; t < d.t_split - half; t += dt) {
+    if (d.HeldOutAt(t)) continue;
     const auto a = std::lower_bound(d.t.begin(), d.t.end(), t - half);
     const auto b = std::lower_bound(d.t.begin(), d.t.end(), t + half);
     if (a == d.t.end() || b == d.t.end() || b <= a) continue;
     const size_t i = static_cast<size_t>(a - d.t.begin()), j = static_cast<size_t>(b - d.t.begin());
+    if (d.by_runs && d.run[i] != d.run[j]) continue;  // never across a run's start
     const double span = d.t[j] - d.t[i];
     if (span < half || span > 4 * half) continue;
     const Eigen::Vector2d dp = P[j].z.head<2>() - P[i].z.head<2>();

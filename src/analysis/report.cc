@@ -63,6 +63,58 @@ json TestsJson(const ResidualTests& t) {
   return j;
 }
 
+json DeadReckoningJson(const DeadReckoning& d) {
+  return {{"duration_s", d.duration_s},
+          {"rms_m", d.rms_m},
+          {"final_m", d.final_m},
+          {"final_rad", d.final_rad},
+          {"runs", d.runs}};
+}
+
+json RunsJson(const std::vector<RunReport>& runs) {
+  json j = json::array();
+  for (const auto& r : runs) {
+    j.push_back({{"index", r.index},
+                 {"source", r.source},
+                 {"heldout", r.heldout},
+                 {"windows", r.windows},
+                 {"before",
+                  {{"pos_rms_m", r.before_pos_rms_m},
+                   {"heading_rms_rad", r.before_heading_rms_rad},
+                   {"dead_reckoning", DeadReckoningJson(r.dr_before)}}},
+                 {"after",
+                  {{"pos_rms_m", r.after_pos_rms_m},
+                   {"heading_rms_rad", r.after_heading_rms_rad},
+                   {"dead_reckoning", DeadReckoningJson(r.dr_after)}}}});
+  }
+  return j;
+}
+
+// The runs' table and the held-out dead reckoning, in the HTML page.
+void RunsHtml(const AnalyzeResult& r, std::ostringstream& h) {
+  h << "<h2>Dead reckoning over the held-out part</h2><p>Open loop from the first pose of "
+    << "each held-out run through all of it (" << r.heldout_dr_after.runs << " run(s), "
+    << r.heldout_dr_after.duration_s << " s), pooled RMS over runs:</p><table><tr><th></th>"
+    << "<th>before</th><th>after</th></tr><tr><td>position RMS along the run [m]</td><td>"
+    << r.heldout_dr_before.rms_m << "</td><td>" << r.heldout_dr_after.rms_m << "</td></tr>"
+    << "<tr><td>final position error [m]</td><td>" << r.heldout_dr_before.final_m << "</td><td>"
+    << r.heldout_dr_after.final_m << "</td></tr><tr><td>final heading error [rad]</td><td>"
+    << r.heldout_dr_before.final_rad << "</td><td>" << r.heldout_dr_after.final_rad
+    << "</td></tr></table>";
+  if (r.runs.empty()) return;
+  h << "<h2>Runs</h2><table><tr><th>run</th><th>part</th><th>windows</th><th>position RMS at "
+    << r.horizon_s << " s [m] before</th><th>after</th><th>dead reckoning RMS [m] before</th>"
+    << "<th>after</th><th>final [m] before</th><th>after</th><th>source</th></tr>";
+  for (const auto& x : r.runs) {
+    h << "<tr><td>" << x.index << "</td><td>" << (x.heldout ? "held out" : "fit") << "</td><td>"
+      << x.windows << "</td><td>" << x.before_pos_rms_m << "</td><td>" << x.after_pos_rms_m
+      << "</td><td>" << x.dr_before.rms_m << "</td><td>" << x.dr_after.rms_m << "</td><td>"
+      << x.dr_before.final_m << "</td><td>" << x.dr_after.final_m << "</td><td>" << x.source
+      << "</td></tr>";
+  }
+  h << "</table>";
+}
+
 std::string Html(const AnalyzeResult& r) {
   std::ostringstream h;
   h << std::setprecision(4);
@@ -85,7 +137,9 @@ std::string Html(const AnalyzeResult& r) {
   row("held-out position RMS [m]", r.before.heldout.pos_rms_m, r.after.heldout.pos_rms_m);
   row("held-out heading RMS [rad]", r.before.heldout.heading_rms_rad,
       r.after.heldout.heading_rms_rad);
-  h << "</table><p>Effects added: ";
+  h << "</table>";
+  RunsHtml(r, h);
+  h << "<p>Effects added: ";
   for (const auto& e : r.after.effects) h << "<b>" << e << "</b> ";
   if (r.after.effects.empty()) h << "none";
   h << "</p><h2>Parameters</h2><table><tr><th>parameter</th><th>before</th><th>after</th><th>unit</"
@@ -167,6 +221,9 @@ Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
                    "residuals are weighted by 1/sigma^2 per component (x, y: pos_sigma_m; theta: "
                    "heading_sigma_rad)"}};
   j["span_s"] = {{"begin", r.t_begin_s}, {"split", r.t_split_s}, {"end", r.t_end_s}};
+  j["runs"] = RunsJson(r.runs);
+  j["dead_reckoning"] = {{"before", DeadReckoningJson(r.heldout_dr_before)},
+                         {"after", DeadReckoningJson(r.heldout_dr_after)}};
   j["horizon_s"] = r.horizon_s;
   j["diagnosis"] = {{"before", DiagJson(r.diagnosis_before, 12)},
                     {"after", DiagJson(r.diagnosis_after, 12)}};

@@ -123,7 +123,7 @@ bool ScreenEffect(const std::string& spec, const SelectionState& current, const 
   const auto warm = current.warm.find(spec);
   const Eigen::VectorXd* w = warm == current.warm.end() ? nullptr : &warm->second;
   for (const auto& s : Starts(sys, *eff, current.fit.p, command_lag, w)) {
-    Fit f = RunFit(sys, d.rec->controls, d.screen_meas, s, d.fixed, false, 1);
+    Fit f = RunFit(sys, d.rec->controls, d.screen_meas, s, d.limits, false, 1);
     if (f.ok && (!out->fit.ok || f.cost < out->fit.cost)) out->fit = std::move(f);
   }
   out->ok = out->fit.ok;
@@ -139,7 +139,7 @@ void ConfirmEffect(const Screened& s, int round, const SelectionState& current, 
   t.trial.signature_z = SignatureZ(s.effects.back()->signature(), current.diagnosis);
   t.effects = s.effects;
   const Fit best =
-      RunFit(sys, d.rec->controls, d.fit_meas, s.fit.p, d.fixed, true, 1, kRefineIterations);
+      RunFit(sys, d.rec->controls, d.fit_meas, s.fit.p, d.limits, true, 1, kRefineIterations);
   if (!best.ok) return;
   t.fit = best;
   t.eval = Evaluate(sys, best.p, d);

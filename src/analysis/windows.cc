@@ -41,15 +41,49 @@ double MedianInterval(const std::vector<double>& t) {
   return *mid;
 }
 
-// For each pose, the index of the first pose after which a gap follows (n - 1 if none).
-std::vector<int> NextGap(const std::vector<double>& t, double median, double h) {
+// For each pose, the index of the first pose after which a gap (or a new run) follows
+// (n - 1 if none).
+std::vector<int> NextGap(const std::vector<double>& t, const std::vector<int>& run, double median,
+                         double h) {
   const size_t n = t.size();
   const double limit = std::max(kInnerGapIntervals * median, kInnerGapHorizonFraction * h);
   std::vector<int> next(n, static_cast<int>(n) - 1);
   for (size_t k = n - 1; k-- > 0;) {
-    next[k] = t[k + 1] - t[k] > limit ? static_cast<int>(k) : next[k + 1];
+    const bool new_run = !run.empty() && run[k + 1] != run[k];
+    next[k] = new_run || t[k + 1] - t[k] > limit ? static_cast<int>(k) : next[k + 1];
   }
   return next;
+}
+
+// Runs: each pose's run, and which runs are held out (AnalyzeOptions::heldout_runs, or
+// every third). Only for a recording of two or more runs.
+void SetRuns(const Recording& rec, const AnalyzeOptions& o, Dataset* d) {
+  const int n = static_cast<int>(rec.runs.size());
+  if (n < 2) {
+    if (!o.heldout_runs.empty())
+      throw AnalysisError(rec.source + ": --heldout-runs: the recording is one run");
+    return;
+  }
+  d->by_runs = true;
+  for (const auto& r : rec.runs) {
+    d->run_start_s.push_back(rec.controls.ToSeconds(r.start_ns));
+    d->limits.run_starts.push_back(r.start_ns);
+  }
+  for (const auto& p : rec.poses) d->run.push_back(RunOf(rec, p.t_ns));
+  d->run_heldout.assign(static_cast<size_t>(n), false);
+  for (int k : o.heldout_runs) {
+    if (k < 1 || k > n) {
+      throw AnalysisError(rec.source + ": --heldout-runs: no run " + std::to_string(k) +
+                          " (the recording has runs 1.." + std::to_string(n) + ")");
+    }
+    d->run_heldout[static_cast<size_t>(k - 1)] = true;
+  }
+  if (o.heldout_runs.empty()) {
+    for (int r = 0; r < n; ++r)
+      d->run_heldout[static_cast<size_t>(r)] = n == 2 ? r == 1 : r % 3 == 2;
+  }
+  if (std::all_of(d->run_heldout.begin(), d->run_heldout.end(), [](bool h) { return h; }))
+    throw AnalysisError(rec.source + ": --heldout-runs holds out every run; none is left to fit");
 }
 
 int FindEnd(const Dataset& d, int i, double h) {
@@ -65,12 +99,13 @@ int FindEnd(const Dataset& d, int i, double h) {
   return j;
 }
 
+// Non-overlapping windows of h seconds in [t0, t1] outside the held-out runs.
 std::vector<Window> NonOverlapping(const Dataset& d, double h, double t0, double t1, int max_n) {
   std::vector<Window> w;
   const auto& t = d.t;
   int i = static_cast<int>(std::lower_bound(t.begin(), t.end(), t0) - t.begin());
   while (i < static_cast<int>(t.size()) && t[static_cast<size_t>(i)] + h <= t1) {
-    const int j = FindEnd(d, i, h);
+    const int j = d.by_runs && d.HeldOutAt(t[static_cast<size_t>(i)]) ? -1 : FindEnd(d, i, h);
     if (j < 0) {
       ++i;
       continue;
@@ -131,7 +166,53 @@ Eigen::Vector2d EstimatePoseSigma(const Recording& rec) {
   return {robust_sigma(dp, 1e-4), robust_sigma(dh, 1e-4)};
 }
 
+// Runs without a single evaluation window (shorter than one horizon): skipped, and said.
+void CountShortRuns(const Dataset& d, std::vector<std::string>* warnings) {
+  if (!d.by_runs) return;
+  std::vector<int> windows(d.run_start_s.size(), 0);
+  for (const auto& w : d.eval) ++windows[static_cast<size_t>(d.run[static_cast<size_t>(w.start)])];
+  std::string which;
+  int skipped = 0;
+  for (size_t r = 0; r < windows.size(); ++r) {
+    if (windows[r] > 0) continue;
+    ++skipped;
+    which += (which.empty() ? "" : ", ") + std::to_string(r + 1);
+  }
+  if (skipped == static_cast<int>(windows.size())) {
+    throw AnalysisError(d.rec->source + ": every run is shorter than one prediction window (" +
+                        std::to_string(d.horizon) + " s); lower --horizon");
+  }
+  if (skipped > 0) {
+    warnings->push_back(std::to_string(skipped) + " run(s) shorter than one prediction window (" +
+                        std::to_string(d.horizon) + " s) skipped: run " + which);
+  }
+}
+
+// Evaluation windows from (strided) measured poses in [t0, t1]; none straddles the split.
+std::vector<Window> EvaluationWindows(const Dataset& d, double t0, double t1, int max_n) {
+  std::vector<Window> out;
+  const int first = static_cast<int>(std::lower_bound(d.t.begin(), d.t.end(), t0) - d.t.begin());
+  const int n = static_cast<int>(d.t.size());
+  const int stride = std::max(1, (n - first) / max_n);
+  for (int i = first; i < n; i += stride) {
+    const int j = FindEnd(d, i, d.horizon);
+    if (j < 0 || d.t[static_cast<size_t>(j)] > t1) continue;
+    const bool held = d.HeldOutAt(d.t[static_cast<size_t>(i)]);
+    const bool fit = d.by_runs ? !held : d.t[static_cast<size_t>(j)] <= d.t_split;
+    if (fit || held) out.push_back({i, j});
+  }
+  return out;
+}
+
 }  // namespace
+
+bool Dataset::HeldOutAt(double t_s) const {
+  if (!by_runs) return t_s >= t_split;
+  const auto it = std::upper_bound(run_start_s.begin(), run_start_s.end(), t_s);
+  const size_t r =
+      it == run_start_s.begin() ? 0 : static_cast<size_t>(it - run_start_s.begin()) - 1;
+  return run_heldout[r];
+}
 
 Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::string>* warnings) {
   Dataset d;
@@ -158,23 +239,15 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
       << " s before the first control; that part is not used";
     warnings->push_back(m.str());
   }
-  d.t_split = t0 + o.fit_fraction * (t1 - t0);
+  SetRuns(rec, o, &d);
+  d.t_split = d.by_runs ? t1 : t0 + o.fit_fraction * (t1 - t0);
   d.pose_interval = MedianInterval(d.t);
-  d.next_gap = NextGap(d.t, d.pose_interval, o.horizon_s);
+  d.next_gap = NextGap(d.t, d.run, d.pose_interval, o.horizon_s);
   d.sigma = o.pose_sigma ? *o.pose_sigma : EstimatePoseSigma(rec);
   d.R = Eigen::Vector3d(d.sigma[0] * d.sigma[0], d.sigma[0] * d.sigma[0], d.sigma[1] * d.sigma[1])
             .asDiagonal();
-  // Evaluation windows from (strided) measured poses; none straddles the split.
-  const int first = static_cast<int>(std::lower_bound(d.t.begin(), d.t.end(), t0) - d.t.begin());
-  const int n = static_cast<int>(d.t.size());
-  const int stride = std::max(1, (n - first) / o.max_eval_windows);
-  for (int i = first; i < n; i += stride) {
-    const int j = FindEnd(d, i, o.horizon_s);
-    if (j < 0 || d.t[static_cast<size_t>(j)] > t1) continue;
-    const bool fit = d.t[static_cast<size_t>(j)] <= d.t_split;
-    const bool held = d.t[static_cast<size_t>(i)] >= d.t_split;
-    if (fit || held) d.eval.push_back({i, j});
-  }
+  d.eval = EvaluationWindows(d, t0, t1, o.max_eval_windows);
+  CountShortRuns(d, warnings);
   d.fit_windows = NonOverlapping(d, o.horizon_s, t0, d.t_split, o.max_fit_windows);
   const double hs = std::max({kMinShortWindowS, kShortWindowFraction * o.horizon_s,
                               kShortWindowIntervals * d.pose_interval});
@@ -185,11 +258,11 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
                         ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
                         "shorter than a few horizons)");
   int held = 0;
-  for (const auto& w : d.eval) held += d.t[static_cast<size_t>(w.start)] >= d.t_split;
+  for (const auto& w : d.eval) held += d.HeldOutAt(d.t[static_cast<size_t>(w.start)]);
   if (held < 5)
-    throw AnalysisError(rec.source +
-                        ": fewer than 5 prediction windows in the held-out part; lower "
-                        "--fit-fraction or --horizon");
+    throw AnalysisError(rec.source + ": fewer than 5 prediction windows in the held-out part; " +
+                        (d.by_runs ? "hold out other runs (--heldout-runs) or lower --horizon"
+                                   : "lower --fit-fraction or --horizon"));
   d.fit_meas = WindowMeasurements(d, d.fit_windows, o.poses_per_window);
   d.short_meas = WindowMeasurements(d, d.short_windows, std::max(2, o.poses_per_window / 2));
   d.screen_meas = d.fit_meas;

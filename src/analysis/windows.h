@@ -14,6 +14,13 @@
 
 namespace kincal::analysis {
 
+// What every fit of one recording respects: parameters held at their value (--fix, System
+// indices) and the runs' starts (no warm-up crosses one).
+struct FitLimits {
+  std::vector<int> fixed;
+  std::vector<TimeNs> run_starts;
+};
+
 struct Window {
   int start;  // pose index
   int end;    // pose index of the horizon end
@@ -36,7 +43,17 @@ struct Dataset {
   // ones confirmed on all (the fit windows themselves when there are too few).
   std::vector<PoseMeasurement> screen_meas;
   std::vector<RegressorValues> features;  // per eval window (regressors.h)
-  std::vector<int> fixed;                 // model parameters held (--fix), System indices
+  // Held parameters (--fix) and the runs' starts: what every fit of this data respects.
+  FitLimits limits;
+  // Runs: each pose's run, each run's start (s) and whether it is held out. With two or
+  // more runs whole runs are held out (AnalyzeOptions::heldout_runs); otherwise the time
+  // after t_split.
+  std::vector<int> run;
+  std::vector<double> run_start_s;
+  std::vector<bool> run_heldout;
+  bool by_runs = false;
+  // Is time t (s) in the held-out part?
+  bool HeldOutAt(double t_s) const;
 };
 
 // Cuts the recording into windows; throws AnalysisError naming the recording when it is too

@@ -186,7 +186,13 @@ void Build(const System& sys, const ControlSignal& controls, std::span<const Pos
   for (size_t g = 0; g < groups.size(); ++g) {
     pb->start_ns[g] = groups[g].front()->t_ns;
     const double t0 = controls.ToSeconds(pb->start_ns[g]);
-    auto* cost = new SegmentCost(sys, controls, t0, options.warmup_s, groups[g]);
+    double warmup = options.warmup_s;
+    const auto run =
+        std::upper_bound(options.run_starts.begin(), options.run_starts.end(), pb->start_ns[g]);
+    if (run != options.run_starts.begin()) {
+      warmup = std::min(warmup, std::max(0.0, t0 - controls.ToSeconds(*std::prev(run))));
+    }
+    auto* cost = new SegmentCost(sys, controls, t0, warmup, groups[g]);
     pb->costs.push_back(cost);
     pb->problem.AddResidualBlock(cost, loss, pb->starts[g].data(), pb->params.data());
   }

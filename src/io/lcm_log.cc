@@ -5,6 +5,7 @@
 #include <cmath>
 #include <kincal/controls_t.hpp>
 #include <kincal/pose_t.hpp>
+#include <kincal/run_t.hpp>
 #include <optional>
 
 #include "kincal/angles.h"
@@ -15,6 +16,8 @@
 namespace kincal {
 
 namespace {
+
+constexpr const char* kRunChannel = "KINCAL_RUN";
 
 struct TimedControls {
   double t;  // s, the message's utime
@@ -68,6 +71,34 @@ std::optional<TimedPose> DecodePose(const LcmLogEvent& ev, const std::string& wh
   return TimedPose{static_cast<double>(m.utime) * 1e-6, z};
 }
 
+// One run_t event: the run's start (s, its utime) and source. Throws naming `where`.
+RecordingRun DecodeRun(const LcmLogEvent& ev, const std::string& where, double* start_s) {
+  kincal::run_t m;
+  if (m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) < 0) {
+    throw RecordingError(where + " on " + ev.channel + ": not a kincal.run_t");
+  }
+  *start_s = static_cast<double>(m.utime) * 1e-6;
+  return {0, m.source};
+}
+
+// The runs' starts on the recording's time base; they must increase.
+void PlaceRuns(const std::vector<std::pair<double, RecordingRun>>& runs, const std::string& path,
+               Recording* rec) {
+  for (const auto& [t, run] : runs) {
+    RecordingRun r = run;
+    r.start_ns = SecondsToNs(t - rec->origin_s);
+    if (!rec->runs.empty() && r.start_ns <= rec->runs.back().start_ns) {
+      throw RecordingError(path + ": run " + std::to_string(rec->runs.size() + 1) +
+                           " starts before run " + std::to_string(rec->runs.size()) +
+                           " (runs must be in time order)");
+    }
+    rec->runs.push_back(r);
+  }
+  // Samples before the first marked run belong to it.
+  if (!rec->runs.empty())
+    rec->runs.front().start_ns = std::min<TimeNs>(rec->runs.front().start_ns, 0);
+}
+
 // The streams (in arrival order) as a recording: each sorted by its own stamps (stable),
 // times from the earlier first sample, repeated stamps counted.
 Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> poses,
@@ -115,6 +146,7 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
   }
   std::vector<TimedControls> controls;
   std::vector<TimedPose> poses;
+  std::vector<std::pair<double, RecordingRun>> runs;
   LcmLogEvent ev;
   while (log->Next(&ev)) {
     const std::string where = path + ": event " + std::to_string(ev.eventnum) + " (byte " +
@@ -123,11 +155,16 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
       controls.push_back(DecodeControls(ev, where, model));
     } else if (ev.channel == pose_channel) {
       if (auto p = DecodePose(ev, where)) poses.push_back(*p);
+    } else if (ev.channel == kRunChannel) {
+      double t = 0;
+      RecordingRun r = DecodeRun(ev, where, &t);
+      runs.emplace_back(t, std::move(r));
     }
   }
   if (controls.empty()) throw RecordingError(path + ": no controls on channel " + controls_channel);
   if (poses.empty()) throw RecordingError(path + ": no poses on channel " + pose_channel);
   Recording rec = Assemble(std::move(controls), std::move(poses), model, path);
+  PlaceRuns(runs, path, &rec);
   // Damage is not fatal (the rest of the log is still good) but never silent.
   for (const auto& p : log->problems()) rec.warnings.push_back(p);
   if (log->damaged_stretches() > static_cast<int64_t>(log->problems().size())) {

@@ -20,7 +20,21 @@ struct Row {
   int line;
   double t;
   std::vector<double> v;
+  long long run = 0;  // the optional 'run' column of a CSV
 };
+
+// The CSV column that numbers the runs of a recording (optional, in any position).
+constexpr const char* kRunColumn = "run";
+
+long long ParseRun(const std::string& tok, const std::string& where) {
+  long long v = 0;
+  const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
+  if (ec != std::errc() || p != tok.data() + tok.size()) {
+    throw RecordingError(where + ": column 'run': expected an integer run number, got '" + tok +
+                         "'");
+  }
+  return v;
+}
 
 std::string Trim(std::string s) {
   const auto b = s.find_first_not_of(" \t\r");
@@ -89,12 +103,48 @@ bool ReadLine(std::istream& in, std::string* line, const std::string& path, int 
   return any;
 }
 
-// Reads a CSV with a header; returns rows with columns ordered as `wanted`.
-std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted) {
+// The columns of `wanted` (after "t") in the header `cols`, and the optional run column
+// (*run_col, -1 if none); throws naming a missing, repeated or unexpected column.
+std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
+                             const std::vector<std::string>& wanted, const std::string& where,
+                             int* run_col) {
+  std::vector<int> order;
+  std::map<std::string, int> index;
+  for (size_t i = 0; i < cols.size(); ++i) {
+    if (index.count(cols[i]))
+      throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
+    index[cols[i]] = static_cast<int>(i);
+  }
+  std::string expected = "t";
+  for (const auto& w : wanted) expected += "," + w;
+  std::vector<std::string> all = {"t"};
+  all.insert(all.end(), wanted.begin(), wanted.end());
+  if (index.count(kRunColumn)) *run_col = index[kRunColumn];
+  for (const auto& w : all) {
+    if (!index.count(w)) {
+      throw RecordingError(where + ": header lacks column '" + w + "' (expected header '" +
+                           expected + "')");
+    }
+    order.push_back(index[w]);
+  }
+  for (const auto& c : cols) {
+    if (c != kRunColumn && std::find(all.begin(), all.end(), c) == all.end()) {
+      throw RecordingError(where + ": unexpected column '" + c + "' (expected header '" + expected +
+                           "')");
+    }
+  }
+  return order;
+}
+
+// Reads a CSV with a header; returns rows with columns ordered as `wanted`, and a 'run'
+// column's value when the file has one (*has_run).
+std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted,
+                         bool* has_run) {
   std::ifstream in = Open(path);
   std::string line;
   int n = 0;
   std::vector<int> order;
+  int run_col = -1;
   std::vector<Row> rows;
   while (ReadLine(in, &line, path, n + 1)) {
     ++n;
@@ -103,36 +153,13 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     const auto cols = Split(line, false);
     const std::string where = path + ":" + std::to_string(n);
     if (order.empty()) {
-      std::map<std::string, int> index;
-      for (size_t i = 0; i < cols.size(); ++i) {
-        if (index.count(cols[i]))
-          throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
-        index[cols[i]] = static_cast<int>(i);
-      }
-      std::string expected = "t";
-      for (const auto& w : wanted) expected += "," + w;
-      std::vector<std::string> all = {"t"};
-      all.insert(all.end(), wanted.begin(), wanted.end());
-      for (const auto& w : all) {
-        if (!index.count(w)) {
-          throw RecordingError(where + ": header lacks column '" + w + "' (expected header '" +
-                               expected + "')");
-        }
-        order.push_back(index[w]);
-      }
-      if (cols.size() != all.size()) {
-        for (const auto& c : cols) {
-          if (std::find(all.begin(), all.end(), c) == all.end()) {
-            throw RecordingError(where + ": unexpected column '" + c + "' (expected header '" +
-                                 expected + "')");
-          }
-        }
-      }
+      order = HeaderOrder(cols, wanted, where, &run_col);
       continue;
     }
-    if (cols.size() != order.size()) {
-      throw RecordingError(where + ": expected " + std::to_string(order.size()) +
-                           " values, found " + std::to_string(cols.size()));
+    const size_t columns = order.size() + (run_col >= 0 ? 1 : 0);
+    if (cols.size() != columns) {
+      throw RecordingError(where + ": expected " + std::to_string(columns) + " values, found " +
+                           std::to_string(cols.size()));
     }
     Row r{n, 0.0, {}};
     r.t = ParseNumber(cols[static_cast<size_t>(order[0])], where, "column 't'");
@@ -140,9 +167,11 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
       r.v.push_back(ParseNumber(cols[static_cast<size_t>(order[k])], where,
                                 "column '" + wanted[k - 1] + "'"));
     }
+    if (run_col >= 0) r.run = ParseRun(cols[static_cast<size_t>(run_col)], where);
     rows.push_back(std::move(r));
   }
   if (order.empty()) throw RecordingError(path + ": empty file (no header)");
+  *has_run = run_col >= 0;
   return rows;
 }
 
@@ -263,14 +292,48 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
   return rec;
 }
 
+// The rows of each run (by the 'run' column, in the order the controls first name them),
+// each assembled on its own and the runs joined (JoinRuns: never across a run's start).
+Recording AssembleRuns(const std::vector<Row>& controls, const std::vector<Row>& poses,
+                       int num_controls, const std::string& cpath, const std::string& ppath) {
+  std::vector<long long> order;
+  std::map<long long, std::pair<std::vector<Row>, std::vector<Row>>> by_run;
+  for (const Row& r : controls) {
+    if (!by_run.count(r.run)) order.push_back(r.run);
+    by_run[r.run].first.push_back(r);
+  }
+  for (const Row& r : poses) {
+    if (!by_run.count(r.run)) {
+      throw RecordingError(ppath + ":" + std::to_string(r.line) + ": run " + std::to_string(r.run) +
+                           " has poses but no controls in " + cpath);
+    }
+    by_run[r.run].second.push_back(r);
+  }
+  std::vector<Recording> parts;
+  for (long long run : order) {
+    const auto& [c, p] = by_run[run];
+    if (p.empty()) {
+      throw RecordingError(cpath + ": run " + std::to_string(run) +
+                           " has controls but no poses in " + ppath);
+    }
+    const std::string which = " (run " + std::to_string(run) + ")";
+    parts.push_back(
+        Assemble(cpath + " + " + ppath + which, c, p, num_controls, cpath + which, ppath + which));
+  }
+  Recording rec = JoinRuns(std::move(parts));
+  rec.source = cpath + " + " + ppath;
+  return rec;
+}
+
 }  // namespace
 
 Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
                            const KinematicModel& model) {
   std::vector<std::string> names;
   for (const auto& c : model.controls()) names.push_back(c.name);
-  const auto controls = ReadCsv(controls_csv, names);
-  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"});
+  bool control_runs = false, pose_runs = false;
+  const auto controls = ReadCsv(controls_csv, names, &control_runs);
+  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"}, &pose_runs);
   std::vector<double> limits;
   std::vector<const char*> expected;
   for (const auto& c : model.controls()) {
@@ -280,6 +343,13 @@ Recording ReadCsvRecording(const std::string& controls_csv, const std::string& p
   CheckRanges(controls, controls_csv, names, limits, expected);
   CheckRanges(poses, poses_csv, {"x", "y", "theta"}, {kMaxAbsPositionM, kMaxAbsPositionM, 1e6},
               {"metres", "metres", "radians"});
+  if (control_runs != pose_runs) {
+    throw RecordingError((control_runs ? controls_csv : poses_csv) + " has a 'run' column and " +
+                         (control_runs ? poses_csv : controls_csv) +
+                         " has none: number the runs in both files");
+  }
+  if (control_runs)
+    return AssembleRuns(controls, poses, model.num_controls(), controls_csv, poses_csv);
   return Assemble(controls_csv + " + " + poses_csv, controls, poses, model.num_controls(),
                   controls_csv, poses_csv);
 }
@@ -298,6 +368,12 @@ Recording ReadMrclam(const std::string& dir, int robot) {
                            base + "_Odometry.dat", base + "_Groundtruth.dat");
   rec.stats.comment_lines = comments;
   return rec;
+}
+
+int RunOf(const Recording& rec, TimeNs t_ns) {
+  const auto it = std::upper_bound(rec.runs.begin(), rec.runs.end(), t_ns,
+                                   [](TimeNs t, const RecordingRun& r) { return t < r.start_ns; });
+  return it == rec.runs.begin() ? 0 : static_cast<int>(it - rec.runs.begin()) - 1;
 }
 
 }  // namespace kincal

@@ -137,6 +137,87 @@ class Listing(Fixture):
         self.assertIn("--poses /mocap/robot/pose", r.stdout)
 
 
+class Car(Fixture):
+    """Issue 33: a 1/10-scale car, thirty 4 s ROS 1 bags of AckermannDriveStamped commands
+    (stamped by the car's clock, 8,000 s off) and motion-capture poses; steering gain 0.6,
+    offset 0.02 rad and a 0.1 s steering lag, the wheelbase held from the drawing."""
+
+    def write_bags(self, folder, runs=30):
+        import numpy as np
+
+        os.makedirs(folder)
+        rng = np.random.default_rng(33)
+        sims = []
+        for k in range(runs):
+            sim = ros_bags.car_run(rng)
+            ros_bags.write_car_run(os.path.join(folder, f"run_{k:02d}.bag"), sim, t0_s=10.0 * k)
+            sims.append(sim)
+        return sims
+
+    def test_thirty_bags_to_parameters_in_three_commands(self):
+        folder = self.path("bags")
+        self.write_bags(folder)
+        r = kincal("import", "--list", os.path.join(folder, "run_00.bag"))
+        self.assertIn("--model bicycle --controls /drive", r.stdout)
+        log = self.path("car.lcm")
+        bags = sorted(os.path.join(folder, b) for b in os.listdir(folder))
+        r = kincal("import", *bags, "--out", log, "--model", "bicycle", "--controls", "/drive",
+                   "--poses", "/mocap/car/pose")
+        self.assertIn("30 bags (one run each)", r.stdout)
+        self.assertIn("two clocks", r.stdout)
+        self.assertIn("-8000.0", r.stdout)  # the commands' offset, said
+        self.assertIn("stamps: receive", r.stdout)
+        out = self.path("analysis")
+        kincal("analyze", "--log", log, "--model", "bicycle", "--fix", "wheelbase=0.33", "--out", out)
+        with open(os.path.join(out, "report.json")) as f:
+            report = json.load(f)
+        self.assertEqual(len(report["runs"]), 30)
+        self.assertEqual([x["index"] for x in report["runs"] if x["heldout"]], list(range(3, 31, 3)))
+        self.assertEqual(report["after"]["fixed"], ["wheelbase=0.33"])
+        self.assertTrue(any(e.startswith("actuator_lag") for e in report["after"]["effects"]), report["after"]["effects"])
+        truth = dict(ros_bags.CAR_TRUTH)
+        self.assert_within_3_sigma(report, truth, ["k_v", "k_steer", "steer_offset"])
+        lag = [p for n, p in report["after"]["params"].items() if n.startswith("tau_s")]
+        self.assertLess(abs(lag[0]["value"] - truth["tau_s_steer"]), 3 * lag[0]["sigma"] + 0.01, lag)
+        dr = report["dead_reckoning"]
+        self.assertLess(dr["after"]["rms_m"], dr["before"]["rms_m"])
+        # A folder of bags is the same import.
+        log2 = self.path("car2.lcm")
+        kincal("import", folder, "--out", log2, "--model", "bicycle", "--controls", "/drive", "--poses", "/mocap/car/pose")
+        with open(log, "rb") as a, open(log2, "rb") as b:
+            self.assertEqual(a.read(), b.read())
+
+    def test_bags_of_different_robots_are_refused_and_nothing_written(self):
+        folder = self.path("bags")
+        self.write_bags(folder, runs=2)
+        other = self.path("other.bag")
+        ros_bags.write_diffdrive(other, "ros1", ros_bags.diffdrive(duration=3.0))
+        log = self.path("car.lcm")
+        r = kincal("import", os.path.join(folder, "run_00.bag"), other, "--out", log, "--model", "bicycle",
+                   "--controls", "/drive", "--poses", "/mocap/car/pose", ok=False)
+        self.assertNotEqual(r.returncode, 0)
+        self.assertIn("topic /drive: not in the bag", r.stderr)
+        self.assertFalse(os.path.exists(log))
+
+
+class Encoders(Fixture):
+    """A diff drive whose JointState has encoder angles and no velocities: the rates come
+    from the angle differences, and the wheels come back within 3 sigma."""
+
+    def test_joint_positions_only(self):
+        sim = ros_bags.diffdrive()
+        bag = self.path("robot.bag")
+        ros_bags.write_diffdrive_encoders(bag, "ros1", sim)
+        log = self.path("robot.lcm")
+        kincal("import", bag, "--out", log, "--model", "diffdrive", "--controls", "/joint_states",
+               "--joints", "left_wheel_joint,right_wheel_joint", "--poses", "/mocap/robot/pose")
+        report, _ = self.analyze(log, "diffdrive", "r_l=0.034,r_r=0.034,d=0.17")
+        self.assert_within_3_sigma(report, sim.truth, ["r_l", "r_r", "d"])
+        r = kincal("import", bag, "--out", log, "--model", "diffdrive", "--controls", "/joint_states",
+                   "--joints", "left_wheel_joint,right_wheel_joint", "--joint-field", "velocity", ok=False)
+        self.assertIn("2 joint names but 0 velocity values", r.stderr)
+
+
 class LargeBag(Fixture):
     """Streaming: importing five times the frames takes no more memory."""
 

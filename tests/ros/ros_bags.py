@@ -12,9 +12,22 @@ from dataclasses import dataclass, field
 import numpy as np
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
-from rosbags.typesys import Stores, get_typestore
+from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 STORE = get_typestore(Stores.ROS2_HUMBLE)
+# ackermann_msgs, as the ROS interface defines them (not in rosbags' standard store).
+STORE.register(
+    {
+        **get_types_from_msg(
+            "float32 steering_angle\nfloat32 steering_angle_velocity\nfloat32 speed\n"
+            "float32 acceleration\nfloat32 jerk\n",
+            "ackermann_msgs/msg/AckermannDrive",
+        ),
+        **get_types_from_msg(
+            "std_msgs/Header header\nackermann_msgs/AckermannDrive drive\n", "ackermann_msgs/msg/AckermannDriveStamped"
+        ),
+    }
+)
 T = STORE.types
 
 
@@ -115,6 +128,40 @@ def unicycle(seed=4, duration=80.0):
     return sim
 
 
+CAR_TRUTH = {"k_v": 0.95, "k_steer": 0.6, "steer_offset": 0.02, "wheelbase": 0.33, "tau_s_steer": 0.1}
+
+
+def car_run(rng, duration=4.0, pose_hz=60.0):
+    """One run of a 1/10-scale car from a random place: AckermannDrive commands (speed,
+    steering angle) on a 20 Hz grid; the car realises k_v x the speed and a steering
+    angle k_steer x the command + offset through a first-order servo lag; rear-axle
+    bicycle kinematics; motion capture with 0.5 mm / 2 mrad noise."""
+    tr = CAR_TRUTH
+
+    def draw(g):
+        return [g.uniform(0.5, 2.0), g.uniform(-0.35, 0.35)]
+
+    cmds = commands(rng, duration, 0.8, draw, 1.0 / 20.0)
+
+    def step(t, state):
+        phi = state if state is not None else tr["k_steer"] * cmds[0][1][1] + tr["steer_offset"]
+        v_cmd, s_cmd = held(cmds, t)
+        a = 1.0 - math.exp(-1e-3 / tr["tau_s_steer"])
+        phi += a * (tr["k_steer"] * s_cmd + tr["steer_offset"] - phi)
+        v = tr["k_v"] * v_cmd
+        return v, v * math.tan(phi) / tr["wheelbase"], phi
+
+    sim = simulate(step, cmds, duration, 20.0, pose_hz, rng, 0.0005, 0.002)
+    start = np.array([rng.uniform(-2, 2), rng.uniform(-2, 2), rng.uniform(-3, 3)])
+    c, s_ = math.cos(start[2]), math.sin(start[2])
+    sim.poses = [
+        (t, (start[0] + c * z[0] - s_ * z[1], start[1] + s_ * z[0] + c * z[1], math.remainder(z[2] + start[2], 2 * math.pi)))
+        for t, z in sim.poses
+    ]
+    sim.truth = tr
+    return sim
+
+
 # --- ROS messages -------------------------------------------------------------------------
 
 
@@ -166,6 +213,28 @@ def tf_message(t, z):
     robot = T["geometry_msgs/msg/TransformStamped"](header=h, child_frame_id="robot", transform=tr)
     other = T["geometry_msgs/msg/TransformStamped"](header=h, child_frame_id="wand", transform=tr)
     return T["tf2_msgs/msg/TFMessage"](transforms=[other, robot]), ns
+
+
+def ackermann_stamped(t, speed, steer, clock_offset_s):
+    s, _ = stamp(t + clock_offset_s)
+    h = T["std_msgs/msg/Header"](stamp=s, frame_id="base_link")
+    drive = T["ackermann_msgs/msg/AckermannDrive"](
+        steering_angle=steer, steering_angle_velocity=0.0, speed=speed, acceleration=0.0, jerk=0.0
+    )
+    return T["ackermann_msgs/msg/AckermannDriveStamped"](header=h, drive=drive)
+
+
+def joint_positions(t, angles):
+    """A JointState with encoder angles only (no velocities), as many drivers publish."""
+    h, ns = header(t, "")
+    msg = T["sensor_msgs/msg/JointState"](
+        header=h,
+        name=["left_wheel_joint", "right_wheel_joint"],
+        position=np.array(angles),
+        velocity=np.zeros(0),
+        effort=np.zeros(0),
+    )
+    return msg, ns
 
 
 def twist(v, w):
@@ -252,6 +321,41 @@ def write_unicycle(path, kind, sim, latency_s=0.003):
     for t, z in sim.poses:
         msg, ns = odometry(t, z)
         poses.append((ns + int(latency_s * 1e9), "/mocap/odom", "nav_msgs/msg/Odometry", msg))
+    with BagWriter(path, kind) as w:
+        for ns, topic, typ, msg in in_time_order(controls, poses):
+            w.write(topic, typ, msg, ns)
+
+
+def write_car_run(path, sim, t0_s, clock_offset_s=-8000.0, latency_s=0.004):
+    """One run as a ROS 1 bag: /drive AckermannDriveStamped stamped by the car's own clock
+    (clock_offset_s away from the recorder's), received as sent; /mocap/car/pose
+    PoseStamped stamped by the recorder's clock, received latency_s later."""
+    controls, poses = [], []
+    for t, (v, steer) in sim.controls:
+        _, ns = stamp(t0_s + t)
+        controls.append((ns, "/drive", "ackermann_msgs/msg/AckermannDriveStamped", ackermann_stamped(t0_s + t, v, steer, clock_offset_s)))
+    for t, z in sim.poses:
+        msg, ns = pose_stamped(t0_s + t, z)
+        poses.append((ns + int(latency_s * 1e9), "/mocap/car/pose", "geometry_msgs/msg/PoseStamped", msg))
+    with BagWriter(path, "ros1") as w:
+        for ns, topic, typ, msg in in_time_order(controls, poses):
+            w.write(topic, typ, msg, ns)
+
+
+def write_diffdrive_encoders(path, kind, sim, latency_s=0.004):
+    """The diff drive with JointState positions only: each wheel's angle, the integral of
+    its rate, wrapped to (-pi, pi] as continuous joints are reported."""
+    controls, angles, last_t, rates = [], [0.0, 0.0], None, None
+    for t, (wl, wr) in sim.controls:
+        if last_t is not None:
+            angles = [a + r * (t - last_t) for a, r in zip(angles, rates)]
+        last_t, rates = t, (wl, wr)
+        msg, ns = joint_positions(t, [math.remainder(a, 2 * math.pi) for a in angles])
+        controls.append((ns + int(latency_s * 1e9), "/joint_states", "sensor_msgs/msg/JointState", msg))
+    poses = []
+    for t, z in sim.poses:
+        msg, ns = pose_stamped(t, z)
+        poses.append((ns + int(latency_s * 1e9), "/mocap/robot/pose", "geometry_msgs/msg/PoseStamped", msg))
     with BagWriter(path, kind) as w:
         for ns, topic, typ, msg in in_time_order(controls, poses):
             w.write(topic, typ, msg, ns)

@@ -46,8 +46,11 @@ struct AnalyzeOptions {
   // Effects already in the model (the baseline is fitted with them; they are not
   // candidates). kincald's online search passes the effects it runs with.
   std::vector<std::string> base_effects;
-  double fit_fraction = 0.7;  // first part of the time span used for fitting
-  double horizon_s = 1.0;     // open-loop prediction horizon
+  double fit_fraction = 0.7;  // first part of the time span used for fitting (one run)
+  // A recording of several runs holds out whole runs: these (1-based), or every third run
+  // (3, 6, ...; the second of two) when empty. fit_fraction does not apply then.
+  std::vector<int> heldout_runs;
+  double horizon_s = 1.0;  // open-loop prediction horizon
   // Pose noise (position m, heading rad) weighting the residuals; estimated from the
   // data (second differences) when not given.
   std::optional<Eigen::Vector2d> pose_sigma;
@@ -131,6 +134,28 @@ struct GoodnessOfFit {
   std::string verdict;
 };
 
+// Open-loop dead reckoning from a run's first pose through all of it, against the poses:
+// what odometry users judge by.
+struct DeadReckoning {
+  double duration_s = 0.0;
+  double rms_m = 0.0;      // position error RMS over the run's poses
+  double final_m = 0.0;    // position error at its last pose
+  double final_rad = 0.0;  // |heading error| at its last pose
+  int runs = 0;            // runs pooled (summaries)
+};
+
+// One run of a recording of several (AnalyzeResult::runs): the 1-horizon prediction error
+// of its windows and its dead reckoning, before and after.
+struct RunReport {
+  int index = 0;  // 1-based
+  std::string source;
+  bool heldout = false;
+  int windows = 0;
+  double before_pos_rms_m = 0.0, after_pos_rms_m = 0.0;
+  double before_heading_rms_rad = 0.0, after_heading_rms_rad = 0.0;
+  DeadReckoning dr_before, dr_after;
+};
+
 struct AnalyzeResult {
   std::string model;
   std::string source;
@@ -147,6 +172,11 @@ struct AnalyzeResult {
   std::vector<std::pair<std::string, std::vector<ResidualPoint>>> residual_steps;
   std::vector<std::string> warnings;
   RecordingStats stats;
+  // Per run (a recording of two or more runs; empty otherwise), and dead reckoning over
+  // the held-out part (each held-out run from its first pose, pooled; for one run, the
+  // held-out span), before and after.
+  std::vector<RunReport> runs;
+  DeadReckoning heldout_dr_before, heldout_dr_after;
 };
 
 AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& options);

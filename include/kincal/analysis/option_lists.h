@@ -15,6 +15,8 @@ namespace kincal {
 // once. Errors name `option`.
 Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
                      std::string_view option = "--init");
+// "3,6,9" (--heldout-runs): run numbers >= 1, each once.
+Status ParseRunList(std::string_view text, std::vector<int>* out);
 // "effect,effect[ch1,ch2],..." (--effects): specs separated by commas outside brackets,
 // each a valid spec (ParseEffectSpec). Brackets must balance.
 Status ParseEffectList(std::string_view text, std::vector<std::string>* out);

@@ -57,6 +57,9 @@ struct BatchOptions {
   // Parameters (System indices) held at their value in params0: a measured dimension.
   // Their rows and columns of every covariance and of the information are zero.
   std::vector<int> fixed;
+  // Starts of the recording's runs (increasing): a segment's warm-up never reaches back
+  // into the run before its own (the robot was carried in between). Empty: one run.
+  std::vector<TimeNs> run_starts;
   bool IsValid(const System& sys, std::string* error) const;
 };
 

@@ -42,6 +42,13 @@ struct RecordingStats {
   int comment_lines = 0;
 };
 
+// One run of a recording: the robot may have been carried back to its start between runs,
+// so nothing is predicted, fitted or carried across a run's start.
+struct RecordingRun {
+  TimeNs start_ns = 0;  // recording time base: the run's first sample
+  std::string source;   // where it came from (a bag's path), may be empty
+};
+
 struct Recording {
   std::string source;      // human-readable origin ("file.csv + file.csv", "MR.CLAM robot 3")
   double origin_s = 0.0;   // file time of t_ns = 0
@@ -49,7 +56,22 @@ struct Recording {
   std::vector<RecordedPose> poses;  // sorted by time, unique times
   RecordingStats stats;
   std::vector<std::string> warnings;  // suspicious but readable input
+  // Runs in time order (start_ns increasing), the first at or before every sample; empty:
+  // the recording is one run.
+  std::vector<RecordingRun> runs;
 };
+
+// The index of the run holding time t_ns (0 when the recording is one run).
+int RunOf(const Recording& rec, TimeNs t_ns);
+
+// Several recordings of one robot (files given one after another) as one recording of
+// runs, in the order given: each part's runs (one if it has none) follow the previous
+// part's. A part keeps its own times when it starts at least kRunGapS after the previous
+// one ends; otherwise it is moved to start kRunGapS after it (each file on its own
+// epoch, or files out of order), and a warning says so. Runs are never joined: nothing
+// predicts across a run's start. The parts must have the same control channels.
+inline constexpr double kRunGapS = 1.0;
+Recording JoinRuns(std::vector<Recording> parts);
 
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
 // error); P.csv: header "t,x,y,theta". Times in seconds, any epoch.
@@ -61,7 +83,8 @@ Recording ReadCsvRecording(const std::string& controls_csv, const std::string& p
 Recording ReadMrclam(const std::string& dir, int robot);
 
 // A kincald recording (LCM event log): kincal.controls_t on `controls_channel` and
-// kincal.pose_t on `pose_channel` (times from their utime fields).
+// kincal.pose_t on `pose_channel` (times from their utime fields); kincal.run_t on
+// KINCAL_RUN (written by `kincal import` of several bags) marks where each run starts.
 Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
                      const std::string& controls_channel = "KINCAL_CONTROLS",
                      const std::string& pose_channel = "KINCAL_POSE");
