@@ -23,7 +23,7 @@ namespace {
 
 struct PlanArgs {
   std::string model, effects, init, checkpoint, report, camera, floor, target, arena, pose_sigma,
-      limits, targets, care, criterion = "targets", out;
+      limits, targets, care, fix, criterion = "targets", out;
   double pose_rate_hz = 15.0, duration_s = 60.0, rate_hz = 20.0, segment_s = 0.5,
          target_height_m = 0.1, margin_px = 10.0;
   bool publish = false, no_plot = false, advise = false;
@@ -187,9 +187,11 @@ int Run(const PlanArgs& a) {
   Eigen::VectorXd p;
   Eigen::MatrixXd prior;
   DesignPoint(*sys, a, &p, &prior);
-  if (a.advise) return RunAdvice(*sys, p, prior, OptionsFrom(*sys, a), a);
+  PlanOptions o = OptionsFrom(*sys, a);
+  if (const Status s = HoldParameters(*sys, ParseMap(a.fix, "--fix"), &p, &prior, &o); !s.ok())
+    throw std::runtime_error("--" + s.message());
+  if (a.advise) return RunAdvice(*sys, p, prior, o, a);
   const auto ws = WorkspaceFrom(a);
-  const PlanOptions o = OptionsFrom(*sys, a);
   std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";
   Motion plan;
   if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan); !s.ok())
@@ -222,6 +224,7 @@ Command AddPlan(CLI::App& app) {
   app.add_option("--model", a->model, "kinematic model")->required();
   app.add_option("--effects", a->effects, "declared effects, e.g. actuator_lag,time_offset");
   app.add_option("--init", a->init, "design point, name=value,... (prior: the generic sigma)");
+  app.add_option("--fix", a->fix, "model parameters known (held, not planned for), name=value,...");
   app.add_option("--checkpoint", a->checkpoint,
                  "a kincald checkpoint: design point and covariance");
   app.add_option("--report", a->report, "an analyze report.json: design point and sigma");

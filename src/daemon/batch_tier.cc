@@ -86,6 +86,7 @@ AnalyzeOptions BatchTier::Options() const {
   o.base_effects = declared_;
   o.effects_mode = opt_.auto_effects ? "auto" : "none";
   o.max_effects = opt_.max_effects;
+  o.fixed = opt_.fixed;
   o.num_threads = opt_.threads > 0
                       ? opt_.threads
                       : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));

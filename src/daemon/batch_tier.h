@@ -44,7 +44,8 @@ struct BatchTierOptions {
   // Analyze's threads, 0: one per core (the result does not depend on them). They run
   // below the pipeline (batch_worker.h), so the frames keep their priority.
   int threads = 1;
-  int max_effects = 4;  // effects the selection may accept
+  int max_effects = 4;                  // effects the selection may accept
+  std::map<std::string, double> fixed;  // robot.fixed: held (kincal analyze --fix)
   CalibrationStoreOptions store;
   bool IsValid(std::string* error) const;
 };

@@ -234,6 +234,7 @@ void LoadRobot(Section s, DaemonConfig& c) {
   s.Get("model", &c.robot.model);
   s.Effects("effects", &c.robot.effects, &c.robot.auto_effects);
   s.Get("guess", &c.robot.guess);
+  s.Get("fixed", &c.robot.fixed);
   s.Get("guess_sigma_fraction", &c.robot.guess_sigma_fraction);
   s.Choice("control_stamp", &c.robot.control_stamp, kControlStampNames);
   s.Get("max_control_delay_s", &c.robot.max_control_delay_s);

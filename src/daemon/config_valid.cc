@@ -1,5 +1,6 @@
 // kincald configuration: the checks of every options struct and of the whole config
 // (loading is in config.cc).
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -125,6 +126,22 @@ bool RobotOptions::IsValid(std::string* error) const {
   std::unique_ptr<System> sys;
   if (const Status s = MakeSystem(model, effects, {}, &sys); !s.ok()) {
     *error = "robot: " + s.message();
+    return false;
+  }
+  std::string known;
+  for (const auto& q : sys->model().params()) known += (known.empty() ? "" : ", ") + q.name;
+  for (const auto& [name, v] : fixed) {
+    if (!Expect(sys->model().ParamIndex(name) >= 0 && std::isfinite(v),
+                "robot.fixed: '" + name + "' is not a parameter of model '" + model +
+                    "' with a finite value (its parameters: " + known + ")",
+                error)) {
+      return false;
+    }
+  }
+  if (!Expect(fixed.empty() || static_cast<int>(fixed.size()) < sys->model().num_params(),
+              "robot.fixed holds every parameter of model '" + model + "' (" + known +
+                  "): nothing is left to calibrate",
+              error)) {
     return false;
   }
   for (const auto& [name, v] : guess) {

@@ -196,6 +196,7 @@ struct Daemon::Impl {
     FilterPrior prior = ConfiguredPrior(sys, cfg.robot, cfg.file);
     if (resume) {
       const int matched = ResumeFrom(sys, *resume, &prior);
+      HoldFixed(sys, cfg.robot.fixed, &prior.mean, &prior.covariance);  // the drawing wins
       spdlog::info("resumed {} of {} parameters from {} ({} updates)", matched, sys.num_params(),
                    cfg.checkpoint.resume, resume->update_count);
     }

@@ -13,6 +13,7 @@
 #include "daemon/messages.h"
 #include "kincal/check.h"
 #include "kincal/estimation/batch.h"
+#include "kincal/plan/planner.h"
 #include "kincal/sim/scenario.h"
 
 namespace kincal::daemon {
@@ -60,6 +61,7 @@ PoseNoiseAdaptationOptions AdaptationOptions(const FilterOptions& f) {
 BatchTierOptions BatchTierOptionsFor(const FilterStageOptions& o) {
   BatchTierOptions b = o.calibration;
   b.auto_effects = o.auto_effects;
+  b.fixed = o.fixed;
   b.lossless = o.lossless;
   return b;
 }
@@ -84,7 +86,21 @@ FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const 
         std::max(std::abs(p.mean[i]), sys.params()[static_cast<size_t>(i)].default_sigma);
     p.covariance(i, i) = s * s;
   }
+  HoldFixed(sys, robot.fixed, &p.mean, &p.covariance);
   return p;
+}
+
+void HoldFixed(const System& sys, const std::map<std::string, double>& fixed, VecN<kMaxState>* mean,
+               StateMat* covariance) {
+  for (const auto& [name, v] : fixed) {
+    const int i = sys.model().ParamIndex(name);  // validated with the config
+    if (i < 0) continue;
+    (*mean)[i] = v;
+    covariance->row(i).setZero();
+    covariance->col(i).setZero();
+    const double s = kHeldSigmaFraction * sys.params()[static_cast<size_t>(i)].default_sigma;
+    (*covariance)(i, i) = s * s;
+  }
 }
 
 int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior) {
@@ -106,6 +122,7 @@ FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
   FilterStageOptions o;
   o.filter = c.filter;
   o.effects = c.robot.effects;
+  o.fixed = c.robot.fixed;
   o.model_check_every_s = 1.0 / c.health_rate_hz;
   o.checkpoint_path = c.checkpoint.path;
   o.checkpoint_every_s = c.checkpoint.every_s;
@@ -544,6 +561,7 @@ double FilterStage::DisagreementSigmas(std::string* worst) const {
     const ParamEstimate& b = calibration_->params[i];
     const int k = sys_->ParamIndex(b.name);
     if (k < 0) return std::numeric_limits<double>::infinity();
+    if (opt_.fixed.count(b.name)) continue;  // held by both
     const double z = std::abs(f[k] - b.value) / std::sqrt(fc(k, k) + b.sigma * b.sigma);
     if (!(z <= most)) {
       most = z;
@@ -628,6 +646,7 @@ void FilterStage::SetFromCalibration(const BatchCalibration& r, double cov_scale
           cov_scale * r.covariance(static_cast<int>(i), static_cast<int>(k));
     }
   }
+  HoldFixed(*sys_, opt_.fixed, mean, cov);  // the batch's zero variance, as the filter holds it
 }
 
 void FilterStage::Recentre(const BatchCalibration& r, const PoseSample& p, TimeNs t) {

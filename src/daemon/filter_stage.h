@@ -55,6 +55,11 @@ struct FilterPrior {
 // parameter's default sigma, whichever is larger) as its sigma. `file` names the config in
 // errors.
 FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const std::string& file);
+// Holds robot.fixed: each named parameter at its value with a negligible sigma
+// (kHeldSigmaFraction of its default sigma) and no correlation, so that the filter does not
+// move it.
+void HoldFixed(const System& sys, const std::map<std::string, double>& fixed, VecN<kMaxState>* mean,
+               StateMat* covariance);
 
 // What the filter stage is configured with (from the config's filter, robot, checkpoint
 // sections and the health rate).
@@ -64,8 +69,9 @@ struct FilterStageOptions {
   double model_check_every_s = 1.0;  // a model_check_t this often (the health rate)
   std::string checkpoint_path;       // empty: no checkpoints
   double checkpoint_every_s = 10.0;
-  bool auto_effects = false;     // robot.effects: auto (the batch tier's selection)
-  BatchTierOptions calibration;  // the batch tier (batch_tier.h)
+  bool auto_effects = false;            // robot.effects: auto (the batch tier's selection)
+  std::map<std::string, double> fixed;  // robot.fixed: held by the filter and the batch
+  BatchTierOptions calibration;         // the batch tier (batch_tier.h)
   // --resume: the checkpoint resumed from. Each batch calibration (of this run's data) is
   // fused with it when both describe the same parameters (FusedWithResumed).
   std::optional<Checkpoint> resumed;

@@ -127,6 +127,34 @@ Status MapAckermann(const Checkpoint& c, const Ros2ControlOptions&, Mapped* m) {
   return Status();
 }
 
+// A car commanded by speed and steering angle: ackermann_steering_controller turns its
+// twist into a traction wheel speed through its radius (a realised speed k_v x the command
+// is a radius k_v x the nominal one) and a steering angle through the wheelbase; the
+// steering gain and offset have no controller parameter.
+Status MapBicycle(const Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
+  std::map<std::string, Param> p;
+  if (Status s = Need(c, {"k_v", "k_steer", "steer_offset", "wheelbase"}, &p); !s.ok()) return s;
+  m->controller = "ackermann_steering_controller";
+  m->entries = {{"wheelbase", p["wheelbase"].value, Sigma("wheelbase", p["wheelbase"], "m")}};
+  if (o.nominal.count("wheel_radius")) {
+    const double r0 = o.nominal.at("wheel_radius");
+    const Param r{r0 * p["k_v"].value, r0 * p["k_v"].sigma};
+    m->entries.push_back({"traction_wheels_radius", r.value, Sigma("effective radius", r, "m")});
+    m->entries.push_back(
+        {"rear_wheels_radius", r.value, "the same, under its name before ROS 2 Jazzy"});
+  } else {
+    m->notes.push_back("speed: the car realises k_v = " + Num(p["k_v"].value) + " (sigma " +
+                       Num(p["k_v"].sigma, 2) +
+                       ") x the commanded speed; give --nominal wheel_radius=R for the "
+                       "controller's traction_wheels_radius (R x k_v)");
+  }
+  m->notes.push_back("steering: realised angle = " + Num(p["k_steer"].value) + " x command + " +
+                     Num(p["steer_offset"].value) +
+                     " rad: no controller parameter; scale and offset the steering joint's "
+                     "command by them (or export --format vesc)");
+  return Status();
+}
+
 Status MapTricycle(const Checkpoint& c, const Ros2ControlOptions& o, Mapped* m) {
   std::map<std::string, Param> p;
   if (Status s = Need(c, {"k_drive", "wheelbase", "k_steer", "steer_offset"}, &p); !s.ok()) {
@@ -188,6 +216,8 @@ Status WriteRos2ControlYaml(std::ostream& out, const Checkpoint& c, const std::s
     s = MapAckermann(c, options, &m);
   } else if (c.model == "tricycle") {
     s = MapTricycle(c, options, &m);
+  } else if (c.model == "bicycle") {
+    s = MapBicycle(c, options, &m);
   } else {
     s = Status::Error("model '" + c.model + "': no ros2_control controller is known for it");
   }

@@ -12,7 +12,8 @@ namespace {
 TimeNs EndOf(const Recording& r) {
   TimeNs end = r.poses.empty() ? 0 : r.poses.back().t_ns;
   if (!r.controls.empty())
-    end = std::max(end, r.controls.ToNs(r.controls.TimeAt(static_cast<int>(r.controls.size()) - 1)));
+    end =
+        std::max(end, r.controls.ToNs(r.controls.TimeAt(static_cast<int>(r.controls.size()) - 1)));
   return end;
 }
 
@@ -22,7 +23,8 @@ void AppendPart(const Recording& part, TimeNs shift_ns, Recording* out) {
   if (part.runs.empty()) {
     out->runs.push_back({shift_ns, part.source});
   } else {
-    for (const auto& r : part.runs) out->runs.push_back({r.start_ns + shift_ns, r.source.empty() ? part.source : r.source});
+    for (const auto& r : part.runs)
+      out->runs.push_back({r.start_ns + shift_ns, r.source.empty() ? part.source : r.source});
   }
   // The run starts no later than its first sample.
   TimeNs first = part.poses.empty() ? 0 : part.poses.front().t_ns;
@@ -31,8 +33,9 @@ void AppendPart(const Recording& part, TimeNs shift_ns, Recording* out) {
   for (size_t i = 0; i < part.controls.size(); ++i) {
     const int k = static_cast<int>(i);
     const auto& v = part.controls.ValuesAt(k);
-    out->controls.Append(part.controls.ToNs(part.controls.TimeAt(k)) + shift_ns,
-                         std::span<const double>(v.data(), static_cast<size_t>(part.controls.num_channels())));
+    out->controls.Append(
+        part.controls.ToNs(part.controls.TimeAt(k)) + shift_ns,
+        std::span<const double>(v.data(), static_cast<size_t>(part.controls.num_channels())));
   }
   for (const auto& p : part.poses) out->poses.push_back({p.t_ns + shift_ns, p.z});
   const RecordingStats& s = part.stats;

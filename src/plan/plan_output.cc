@@ -1,5 +1,6 @@
 #include "kincal/plan/plan_output.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -90,15 +91,18 @@ void PrintPlanSummary(const System& sys, const PlanOptions& o, const Motion& pla
                       const std::vector<Motion>& usual, std::ostream& out) {
   out << "predicted sigma after " << o.duration_s << " s";
   if (o.targets.size() > 0) out << " and time to the targets";
+  // Columns as wide as the longest parameter name, and a space between them.
+  int width = 12;
+  for (const auto& p : sys.params()) width = std::max(width, static_cast<int>(p.name.size()) + 1);
   out << ":\n" << std::left << std::setw(18) << "motion";
-  for (const auto& p : sys.params()) out << std::setw(12) << p.name;
+  for (const auto& p : sys.params()) out << std::setw(width) << p.name;
   out << "time to target\n";
   std::vector<const Motion*> all = {&plan};
   for (const auto& m : usual) all.push_back(&m);
   for (const Motion* m : all) {
     out << std::setw(18) << m->name;
     for (int i = 0; i < sys.num_params(); ++i)
-      out << std::setw(12) << std::setprecision(3) << m->curve.sigma.back()[i];
+      out << std::setw(width) << std::setprecision(3) << m->curve.sigma.back()[i];
     if (std::isfinite(m->curve.time_to_target_s)) {
       out << (m->curve.extrapolated ? "~" : "") << std::setprecision(4) << m->curve.time_to_target_s
           << " s" << (m->curve.extrapolated ? " (extrapolated)" : "");

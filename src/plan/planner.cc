@@ -221,6 +221,40 @@ std::vector<Values> CandidateControls(const System& sys, const Eigen::VectorXd& 
   return out;
 }
 
+Status HoldParameters(const System& sys, const std::map<std::string, double>& fixed,
+                      Eigen::VectorXd* params, Eigen::MatrixXd* prior_cov, PlanOptions* o) {
+  if (fixed.empty()) return {};
+  const KinematicModel& model = sys.model();
+  std::string known;
+  for (const auto& q : model.params()) known += (known.empty() ? "" : ", ") + q.name;
+  std::vector<bool> held(static_cast<size_t>(sys.num_params()), false);
+  for (const auto& [name, v] : fixed) {
+    const int i = model.ParamIndex(name);
+    if (i < 0 || !std::isfinite(v)) {
+      return Status::Error("fix: '" + name + "' is not a parameter of " +
+                           std::string(model.name()) +
+                           " with a finite value (its parameters: " + known + ")");
+    }
+    (*params)[i] = v;
+    const double s = kHeldSigmaFraction * sys.params()[static_cast<size_t>(i)].default_sigma;
+    prior_cov->row(i).setZero();
+    prior_cov->col(i).setZero();
+    (*prior_cov)(i, i) = s * s;
+    held[static_cast<size_t>(i)] = true;
+  }
+  if (static_cast<int>(fixed.size()) >= model.num_params()) {
+    return Status::Error("fix: every parameter of " + std::string(model.name()) + " is held (" +
+                         known + "): nothing is left to plan for");
+  }
+  std::vector<int> care = o->care;
+  if (care.empty()) {
+    for (int i = 0; i < sys.num_params(); ++i) care.push_back(i);
+  }
+  std::erase_if(care, [&](int i) { return held[static_cast<size_t>(i)]; });
+  o->care = care;
+  return {};
+}
+
 Status PlanLimitsFrom(const System& sys, const std::map<std::string, double>& limits,
                       const std::map<std::string, double>& targets, PlanOptions* o) {
   const KinematicModel& model = sys.model();

@@ -118,9 +118,9 @@ TEST(ManyRuns, MovingOneRunFiveMetresAwayChangesNothing) {
   one.runs.clear();
   one_ref.runs.clear();
   o.effects_mode = "none";
-  EXPECT_GT(std::abs(Analyze(one, o).before.fit.pos_rms_m -
-                     Analyze(one_ref, o).before.fit.pos_rms_m),
-            0.01);
+  EXPECT_GT(
+      std::abs(Analyze(one, o).before.fit.pos_rms_m - Analyze(one_ref, o).before.fit.pos_rms_m),
+      0.01);
 }
 
 TEST(ManyRuns, HeldOutRunsCanBeChosenAndBadChoicesAreErrors) {

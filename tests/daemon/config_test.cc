@@ -147,5 +147,26 @@ TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
   }
 }
 
+// robot.fixed: read from YAML, and a name that is not one of the model's parameters, or
+// holding all of them, is an error naming them.
+TEST(DaemonConfig, RobotFixedIsReadAndChecked) {
+  const std::string dir = ::testing::TempDir();
+  const std::string path = dir + "/fixed.yaml";
+  std::ofstream(path) << "robot:\n  model: bicycle\n  fixed: {wheelbase: 0.33}\n";
+  const StatusOr<DaemonConfig> read = ReadDaemonConfig(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->robot.fixed.at("wheelbase"), 0.33);
+  DaemonConfig c;
+  c.robot.model = "bicycle";
+  c.robot.fixed = {{"wheel_base", 0.33}};
+  std::string error;
+  EXPECT_FALSE(c.robot.IsValid(&error));
+  EXPECT_NE(error.find("its parameters: k_v, k_steer, steer_offset, wheelbase"), std::string::npos)
+      << error;
+  c.robot.fixed = {{"k_v", 1}, {"k_steer", 1}, {"steer_offset", 0}, {"wheelbase", 0.3}};
+  EXPECT_FALSE(c.robot.IsValid(&error));
+  EXPECT_NE(error.find("nothing is left to calibrate"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace kincal::daemon

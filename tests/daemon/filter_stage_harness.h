@@ -30,6 +30,7 @@ struct StageScenario {
   std::map<std::string, double> truth;
   std::vector<std::string> declared;    // effects the estimator is told about
   std::map<std::string, double> guess;  // model defaults otherwise
+  std::map<std::string, double> fixed;  // robot.fixed
   double guess_sigma_fraction = 0.15;
   double duration_s = 60.0;
   double camera_hz = 30.0;
@@ -128,6 +129,7 @@ inline FilterPrior Prior(const StageScenario& sc, const System& est) {
   robot.effects = sc.declared;
   robot.guess = sc.guess;
   robot.guess_sigma_fraction = sc.guess_sigma_fraction;
+  robot.fixed = sc.fixed;
   return ConfiguredPrior(est, robot, "test");
 }
 
@@ -153,6 +155,7 @@ inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
   const System est = MakeSystem(sc.model, sc.declared);
   options.effects = sc.declared;
   options.auto_effects = sc.auto_effects;
+  options.fixed = sc.fixed;
   options.lossless = true;  // one thread feeds the stage: decisions at fixed data times
   StageRun run;
   CounterSet counters;

@@ -39,6 +39,26 @@ TEST(FilterStage, ConvergesToTheTruthOnAModelThatFits) {
   EXPECT_EQ(run.params.back().update_count, run.counters.updates);
 }
 
+// robot.fixed: a car's wheelbase from the drawing is held by the filter and by the batch
+// tier; the steering gain it trades off against is then determined.
+TEST(FilterStage, AHeldWheelbaseStaysAndTheSteeringGainIsFound) {
+  StageScenario sc;
+  sc.model = "bicycle";
+  sc.truth = {{"k_v", 0.95}, {"k_steer", 0.6}, {"steer_offset", 0.02}, {"wheelbase", 0.33}};
+  sc.guess = {{"k_v", 1.0}, {"k_steer", 0.7}, {"steer_offset", 0.0}, {"wheelbase", 0.3}};
+  sc.fixed = {{"wheelbase", 0.33}};
+  sc.duration_s = 90.0;
+  const auto run = RunStage(sc, DefaultStageOptions());
+  ASSERT_TRUE(run.calibration.has_value());
+  EXPECT_NEAR(run.Final("wheelbase"), 0.33, 1e-6);
+  EXPECT_LT(run.FinalSigma("wheelbase"), 1e-6);
+  for (const char* name : {"k_v", "k_steer", "steer_offset"}) {
+    EXPECT_NEAR(run.Final(name), sc.truth.at(name), 3 * run.FinalSigma(name)) << name;
+    EXPECT_GT(run.FinalSigma(name), 0.0) << name;
+  }
+  EXPECT_NEAR(run.Final("k_steer"), 0.6, 0.02);
+}
+
 TEST(FilterStage, GatesAnIsolatedOutlierAndIsNotMovedByIt) {
   StageScenario sc = CleanDiffDrive();
   const auto clean = RunStage(sc, DefaultStageOptions());

@@ -99,6 +99,26 @@ TEST(Ros2Control, AckermannAndTricycle) {
   EXPECT_EQ(p.at("wheelbase"), 0.5);
 }
 
+// A car commanded by speed and steering angle: the wheelbase, the effective traction radius
+// on the nominal wheels (a realised speed k_v x the command is a radius k_v x nominal), and
+// the steering correction said where the controller has no parameter for it.
+TEST(Ros2Control, BicycleOnItsNominalWheel) {
+  const auto car = Estimate(
+      "bicycle", {{"k_v", 0.95}, {"k_steer", 0.6}, {"steer_offset", 0.02}, {"wheelbase", 0.33}});
+  std::ostringstream plain;
+  ASSERT_TRUE(WriteRos2ControlYaml(plain, car, "test", {}).ok());
+  EXPECT_EQ(Parse(plain.str()).at("wheelbase"), 0.33);
+  EXPECT_EQ(Parse(plain.str()).count("traction_wheels_radius"), 0u);
+  EXPECT_NE(plain.str().find("--nominal wheel_radius=R"), std::string::npos) << plain.str();
+  Ros2ControlOptions o;
+  o.nominal = {{"wheel_radius", 0.05}};
+  std::ostringstream out;
+  ASSERT_TRUE(WriteRos2ControlYaml(out, car, "test", o).ok());
+  EXPECT_NEAR(Parse(out.str()).at("traction_wheels_radius"), 0.0475, 1e-12);
+  EXPECT_NE(out.str().find("realised angle = 0.6 x command + 0.02 rad"), std::string::npos)
+      << out.str();
+}
+
 TEST(Ros2Control, BadOptionsAndUnknownModelsAreErrors) {
   std::string why;
   Ros2ControlOptions o;

@@ -89,9 +89,9 @@ TEST_F(Runs, BadRunColumnsAreNamedErrors) {
   EXPECT_NE(error("t,v,omega,run\n0,1,0,1\n1,1,0,1\n0,1,0,2\n", "t,x,y,theta,run\n0,0,0,0,1\n")
                 .find("run 2 has controls but no poses"),
             std::string::npos);
-  EXPECT_NE(error("t,v,omega,run\n0,1,0,1\n", "t,x,y,theta\n0,0,0,0\n")
-                .find("has a 'run' column and"),
-            std::string::npos);
+  EXPECT_NE(
+      error("t,v,omega,run\n0,1,0,1\n", "t,x,y,theta\n0,0,0,0\n").find("has a 'run' column and"),
+      std::string::npos);
   EXPECT_NE(error("t,v,omega,run\n0,1,0,1\n", "t,x,y,theta,run\n0,0,0,0,1\n0,1,0,0,7\n")
                 .find("run 7 has poses but no controls"),
             std::string::npos);

@@ -83,6 +83,30 @@ double SpeedUp(const Case& c, const Workspace& ws, const char* label) {
   return best / plan.curve.time_to_target_s;
 }
 
+// A held parameter (a car's wheelbase from the drawing) is known to the plan: its value is
+// the design point's, its prior sigma negligible, and it is not scored.
+TEST(Plan, HeldParametersAreKnownAndNotScored) {
+  const System sys = MakeSystem("bicycle");
+  Eigen::VectorXd p(4);
+  p << 1.0, 1.0, 0.0, 0.33;
+  Eigen::MatrixXd prior = Eigen::MatrixXd::Identity(4, 4) * 0.01;
+  prior(1, 3) = prior(3, 1) = 0.005;
+  PlanOptions o;
+  ASSERT_TRUE(HoldParameters(sys, {{"wheelbase", 0.26}}, &p, &prior, &o).ok());
+  EXPECT_EQ(p[3], 0.26);
+  EXPECT_EQ(prior(1, 3), 0.0);
+  EXPECT_NEAR(std::sqrt(prior(3, 3)), kHeldSigmaFraction * sys.params()[3].default_sigma, 1e-18);
+  EXPECT_EQ(o.care, (std::vector<int>{0, 1, 2}));
+  const Status unknown = HoldParameters(sys, {{"wheel_base", 0.3}}, &p, &prior, &o);
+  EXPECT_NE(unknown.message().find("its parameters: k_v, k_steer, steer_offset, wheelbase"),
+            std::string::npos)
+      << unknown.message();
+  EXPECT_FALSE(HoldParameters(sys,
+                              {{"k_v", 1}, {"k_steer", 1}, {"steer_offset", 0}, {"wheelbase", 0.3}},
+                              &p, &prior, &o)
+                   .ok());
+}
+
 TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
   const Case c = Reference(30.0);
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);

@@ -181,6 +181,13 @@ class Car(Fixture):
         self.assertLess(abs(lag[0]["value"] - truth["tau_s_steer"]), 3 * lag[0]["sigma"] + 0.01, lag)
         dr = report["dead_reckoning"]
         self.assertLess(dr["after"]["rms_m"], dr["before"]["rms_m"])
+        yaml_path = self.path("car_kinematics.yaml")
+        kincal("export", "--report", os.path.join(out, "report.json"), "--format", "ros2_control",
+               "--nominal", "wheel_radius=0.05", "--out", yaml_path)
+        p = read_ros2_params(yaml_path, "ackermann_steering_controller")
+        self.assertEqual(p["wheelbase"], 0.33)
+        k_v = report["after"]["params"]["k_v"]
+        self.assertAlmostEqual(p["traction_wheels_radius"], 0.05 * k_v["value"], delta=1e-9)
         # A folder of bags is the same import.
         log2 = self.path("car2.lcm")
         kincal("import", folder, "--out", log2, "--model", "bicycle", "--controls", "/drive", "--poses", "/mocap/car/pose")

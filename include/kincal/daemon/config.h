@@ -133,6 +133,9 @@ struct RobotOptions {
   std::vector<std::string> effects;     // declared
   bool auto_effects = false;            // "auto": add effects online when the check is decisive
   std::map<std::string, double> guess;  // initial parameter values (default: model defaults)
+  // Model parameters held at a known value (a measured dimension): not estimated by the
+  // filter or the batch tier (kincal analyze --fix).
+  std::map<std::string, double> fixed;
   double guess_sigma_fraction = 0.2;
   ControlStamp control_stamp = ControlStamp::kMapped;
   double max_control_delay_s = 0.1;  // a pose waits this long for the controls up to its time

@@ -63,6 +63,15 @@ Eigen::Vector3d StartPose(const Workspace& ws, const PlanOptions& o);
 Status PlanLimitsFrom(const System& sys, const std::map<std::string, double>& limits,
                       const std::map<std::string, double>& targets, PlanOptions* o);
 
+// Model parameters held at a known value (`kincal plan --fix`, kincald's robot.fixed): the
+// design point takes the values, the prior knows them (sigma kHeldSigmaFraction of the
+// parameter's default sigma, uncorrelated), and they are not scored (o->care: the others).
+// An unknown name, or holding every parameter of the model, is an error naming the
+// model's parameters.
+inline constexpr double kHeldSigmaFraction = 1e-6;
+Status HoldParameters(const System& sys, const std::map<std::string, double>& fixed,
+                      Eigen::VectorXd* params, Eigen::MatrixXd* prior_cov, PlanOptions* o);
+
 // Predicted sigma of every parameter against driving time.
 struct SigmaCurve {
   std::vector<double> t_s;
