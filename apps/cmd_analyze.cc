@@ -53,6 +53,8 @@ std::string Python() {
 
 struct AnalyzeArgs {
   std::string model, mrclam, out, init, fix, heldout_runs, effects = "auto", pose_sigma;
+  std::string controls_kind = "rate";  // or "position": encoder counts or angles
+  double counts_per_rev = 0.0;
   std::vector<std::string> controls, poses, log;  // repeated: one run (or more) each
   int robot = 0;
   AnalyzeOptions opt;
@@ -111,9 +113,11 @@ Recording ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
           "--controls and --poses go together: " + std::to_string(a.controls.size()) +
           " --controls, " + std::to_string(a.poses.size()) + " --poses");
     for (size_t k = 0; k < a.controls.size(); ++k)
-      parts.push_back(ReadCsvRecording(a.controls[k], a.poses[k], *model));
+      parts.push_back(
+          ReadCsvRecording(a.controls[k], a.poses[k], *model, a.controls_kind == "position"));
   }
   Recording rec = JoinRuns(std::move(parts));
+  if (a.controls_kind == "position") PositionsToRates(a.counts_per_rev, &rec);
   std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
             << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
             << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
@@ -214,6 +218,14 @@ Command AddAnalyze(CLI::App& app) {
   app.add_option("--log", a->log,
                  "a kincald recording or `kincal import` log (LCM) instead of CSV files; "
                  "repeated: one run (or more) each");
+  app.add_option("--controls-kind", a->controls_kind,
+                 "rate (the model's controls) or position (wheel encoders: cumulative counts "
+                 "with --counts-per-rev, or angles in rad), differenced into rates")
+      ->check(CLI::IsMember({"rate", "position"}))
+      ->capture_default_str();
+  app.add_option("--counts-per-rev", a->counts_per_rev,
+                 "with --controls-kind position: encoder counts per wheel revolution (0: rad)")
+      ->check(CLI::NonNegativeNumber);
   app.add_option("--heldout-runs", a->heldout_runs,
                  "runs held out (1-based, e.g. 3,6,9; default: every third run)");
   app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");

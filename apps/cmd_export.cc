@@ -16,6 +16,7 @@
 #include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/ros2_control.h"
+#include "kincal/io/vesc.h"
 
 namespace kincal::app {
 namespace {
@@ -107,12 +108,13 @@ Command AddExport(CLI::App& app) {
   ck->excludes(log)->excludes(rep);
   log->excludes(rep);
   app.add_option("--channel", a->channel, "params channel in the log")->capture_default_str();
-  app.add_option("--format", a->format, "yaml | ros2_control")
-      ->check(CLI::IsMember({"yaml", "ros2_control"}))
+  app.add_option("--format", a->format, "yaml | ros2_control | vesc (F1TENTH's vesc.yaml)")
+      ->check(CLI::IsMember({"yaml", "ros2_control", "vesc"}))
       ->capture_default_str();
   app.add_option("--nominal", a->nominal,
                  "ros2_control: your nominal wheel_radius=R,wheel_separation=D (kept; the "
-                 "calibration goes into the multipliers), or drive_ticks_per_rad=N (tricycle)");
+                 "calibration goes into the multipliers), or drive_ticks_per_rad=N (tricycle); "
+                 "vesc: the speed_to_erpm_gain, steering_angle_to_servo_gain and _offset in use");
   app.add_option("--controller", a->controller,
                  "ros2_control: the controller's name (default: its type's)");
   app.add_option("--out", a->out, "YAML file (default: standard output)");
@@ -137,6 +139,10 @@ Command AddExport(CLI::App& app) {
       o.controller = a->controller;
       o.nominal = ParseNominal(a->nominal);
       if (Status s = WriteRos2ControlYaml(out, c, source, o); !s.ok()) {
+        throw std::runtime_error(s.message());
+      }
+    } else if (a->format == "vesc") {
+      if (Status s = WriteVescYaml(out, c, source, ParseNominal(a->nominal)); !s.ok()) {
         throw std::runtime_error(s.message());
       }
     } else {

@@ -76,4 +76,69 @@ void BM_ImportBag(benchmark::State& state) {
 }
 BENCHMARK(BM_ImportBag)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 
+// Issue 33's car: thirty 4 s ROS 1 bags (AckermannDriveStamped at 20 Hz on the car's clock,
+// motion capture at 60 Hz), written once per process; their folder, empty on failure.
+const std::string& CarBags() {
+  static const std::string path = [] {
+    const fs::path dir = fs::temp_directory_path() / "kincal_bench_car";
+    fs::remove_all(dir);
+    fs::create_directories(dir / "bags");
+    const std::string src = KINCAL_SOURCE_DIR;
+    const std::string cmd =
+        src + "/.venv/bin/python -c \"import sys; sys.path.insert(0, '" + src +
+        "/tests/ros'); import numpy as np, ros_bags; g = np.random.default_rng(33); "
+        "[ros_bags.write_car_run('" +
+        (dir / "bags").string() +
+        "/run_%02d.bag' % k, ros_bags.car_run(g), t0_s=10.0 * k) for k in range(30)]\"";
+    return std::system(cmd.c_str()) == 0 ? (dir / "bags").string() : std::string();
+  }();
+  return path;
+}
+
+std::vector<std::string> ImportCar(const std::string& exe, const std::string& out) {
+  return {exe,          "import", CarBags(), "--out",          out, "--model", "bicycle",
+          "--controls", "/drive", "--poses", "/mocap/car/pose"};
+}
+
+// `kincal import` of the thirty bags into one log of thirty runs (issue 33: <= 5 s).
+void BM_ImportCarBags(benchmark::State& state) {
+  const std::string exe = (fs::read_symlink("/proc/self/exe").parent_path() / "kincal").string();
+  if (!fs::exists(exe) || CarBags().empty()) {
+    state.SkipWithError("kincal or the venv's Python with rosbags is missing");
+    return;
+  }
+  const std::string out = (fs::path(CarBags()).parent_path() / "car.lcm").string();
+  for (auto _ : state) {
+    if (Run(ImportCar(exe, out)) != 0) {
+      state.SkipWithError("kincal import failed");
+      return;
+    }
+  }
+}
+BENCHMARK(BM_ImportCarBags)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+
+// `kincal analyze` of those thirty runs with the wheelbase held, default options (issue 33:
+// <= 10 s on 2 cores).
+void BM_AnalyzeCarRuns(benchmark::State& state) {
+  const std::string exe = (fs::read_symlink("/proc/self/exe").parent_path() / "kincal").string();
+  if (!fs::exists(exe) || CarBags().empty()) {
+    state.SkipWithError("kincal or the venv's Python with rosbags is missing");
+    return;
+  }
+  const fs::path dir = fs::path(CarBags()).parent_path();
+  const std::string log = (dir / "car.lcm").string();
+  if (Run(ImportCar(exe, log)) != 0) {
+    state.SkipWithError("kincal import failed");
+    return;
+  }
+  for (auto _ : state) {
+    if (Run({exe, "analyze", "--log", log, "--model", "bicycle", "--fix", "wheelbase=0.33", "--out",
+             (dir / "analysis").string()}) != 0) {
+      state.SkipWithError("kincal analyze failed");
+      return;
+    }
+  }
+}
+BENCHMARK(BM_AnalyzeCarRuns)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
+
 }  // namespace

@@ -115,6 +115,23 @@ void RunsHtml(const AnalyzeResult& r, std::ostringstream& h) {
   h << "</table>";
 }
 
+// The title and what was fitted and held out, with the weights.
+void HeaderHtml(const AnalyzeResult& r, std::ostringstream& h) {
+  h << "<h1>kincal analysis: " << r.model << "</h1><p>" << r.source << "<br>";
+  if (r.runs.empty()) {
+    h << "fit span " << r.t_begin_s << " .. " << r.t_split_s << " s, held out " << r.t_split_s
+      << " .. " << r.t_end_s << " s";
+  } else {
+    h << r.runs.size() << " runs, held out:";
+    for (const auto& x : r.runs) {
+      if (x.heldout) h << " " << x.index;
+    }
+  }
+  h << "; horizon " << r.horizon_s << " s; residual weights: position " << r.pose_sigma[0] * 1e3
+    << " mm, heading " << r.pose_sigma[1] * 1e3 << " mrad ("
+    << (r.pose_sigma_estimated ? "estimated from the data" : "given") << ")</p>";
+}
+
 std::string Html(const AnalyzeResult& r) {
   std::ostringstream h;
   h << std::setprecision(4);
@@ -123,11 +140,7 @@ std::string Html(const AnalyzeResult& r) {
        "table{border-collapse:collapse;margin:0.5em 0}td,th{border:1px solid #ccc;padding:3px 8px;"
        "text-align:right}th{background:#eee}td:first-child{text-align:left}.acc{background:#dfd}"
        "img{max-width:100%}</style></head><body>";
-  h << "<h1>kincal analysis: " << r.model << "</h1><p>" << r.source << "<br>fit span "
-    << r.t_begin_s << " .. " << r.t_split_s << " s, held out " << r.t_split_s << " .. " << r.t_end_s
-    << " s; horizon " << r.horizon_s << " s; residual weights: position " << r.pose_sigma[0] * 1e3
-    << " mm, heading " << r.pose_sigma[1] * 1e3 << " mrad ("
-    << (r.pose_sigma_estimated ? "estimated from the data" : "given") << ")</p>";
+  HeaderHtml(r, h);
   h << "<h2>Before and after</h2><table><tr><th></th><th>before</th><th>after</th></tr>";
   auto row = [&](const char* name, double a, double b) {
     h << "<tr><td>" << name << "</td><td>" << a << "</td><td>" << b << "</td></tr>";

@@ -498,6 +498,7 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
                     counters_.updates.load(), PipelineNsToUtime(t), &m);
   bool sigmas_small = true;
   for (size_t i = 0; i < m.sigmas.size(); ++i) {
+    if (i < sys_->params().size() && opt_.fixed.count(sys_->params()[i].name)) continue;  // held
     sigmas_small =
         sigmas_small && m.sigmas[i] < kConvergedSigmaFraction * prior_sigma_[static_cast<int>(i)];
   }

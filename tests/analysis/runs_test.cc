@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <fstream>
 #include <random>
+#include <sstream>
 
 #include "analysis/analysis_test_util.h"
 #include "kincal/analysis/analyze.h"
@@ -148,6 +151,60 @@ TEST(ManyRuns, RunsShorterThanAWindowAreSkippedAndCounted) {
   for (const auto& w : r.warnings) said = said || w.find("skipped: run 3") != std::string::npos;
   EXPECT_TRUE(said);
   EXPECT_THROW(Analyze(JoinRuns(CarRuns(8, 0.6, 8)), o), AnalysisError);
+}
+
+// A diff drive's runs in CSV files with a run column (first, in the controls' header),
+// its controls as cumulative encoder counts (4096 per revolution, whole counts): read,
+// differenced into wheel rates run by run, and the wheels come back within 3 sigma.
+TEST(ManyRuns, CsvRunColumnWithEncoderCountsCalibratesTheWheels) {
+  const System sys = MakeSystem("diffdrive");
+  const VecN<kMaxState> p =
+      ParamsFrom(sys, {{"r_l", 0.031}, {"r_r", 0.0313}, {"d", 0.148}}, "truth");
+  std::mt19937_64 rng(17);
+  const double per_rad = 4096 / (2 * M_PI);
+  std::ostringstream c, q;
+  c << "run,t,omega_l,omega_r\n";
+  q << "t,x,y,theta,run\n";
+  c.precision(12);
+  q.precision(12);
+  for (int run = 1; run <= 9; ++run) {
+    ControlSignal u(2, 0);
+    const std::array<double, 2> lo = {-5.0, -5.0}, hi = {20.0, 20.0};
+    AppendPiecewiseRandom(&u, 0, SecondsToNs(8.0), lo, hi, 0.5, 1.5, rng);
+    ControlSignal grid(2, 0);  // the encoders read every 20 ms
+    for (int k = 0; k <= 400; ++k) grid.Append(SecondsToNs(0.02 * k), u.At(0.02 * k));
+    double angle[2] = {1000.0 * run, -500.0 * run};  // counters never reset
+    for (int k = 0; k <= 400; ++k) {
+      c << run << "," << 0.02 * k << "," << std::round(angle[0] * per_rad) << ","
+        << std::round(angle[1] * per_rad) << "\n";
+      for (int w = 0; w < 2; ++w) angle[w] += grid.At(0.02 * k)[static_cast<size_t>(w)] * 0.02;
+    }
+    const auto times = FrameTimes(0, SecondsToNs(8.0), FrameTimingOptions{30.0, 0, 0, 0}, rng);
+    const auto traj = SimulateTruth(sys, sys.MakeState(0, 0, run, p, grid, 0.0), grid, times);
+    const Eigen::Matrix3d R = Eigen::Vector3d(1e-6, 1e-6, 9e-6).asDiagonal();
+    for (const auto& m : MeasurePoses(traj, R, 0, rng)) {
+      q << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "," << run
+        << "\n";
+    }
+  }
+  const std::string dir = ::testing::TempDir();
+  std::ofstream(dir + "/counts.csv") << c.str();
+  std::ofstream(dir + "/poses.csv") << q.str();
+  Recording rec =
+      ReadCsvRecording(dir + "/counts.csv", dir + "/poses.csv", *MakeModel("diffdrive"), true);
+  ASSERT_EQ(rec.runs.size(), 9u);
+  PositionsToRates(4096, &rec);
+  AnalyzeOptions o;
+  o.model = "diffdrive";
+  o.effects_mode = "none";
+  const AnalyzeResult r = Analyze(rec, o);
+  const auto got = ByName(r.after);
+  for (const auto& [name, v] :
+       std::map<std::string, double>{{"r_l", 0.031}, {"r_r", 0.0313}, {"d", 0.148}}) {
+    EXPECT_LE(std::abs(got.at(name).value - v), 3.0 * got.at(name).sigma)
+        << name << " = " << got.at(name).value << " +- " << got.at(name).sigma;
+    EXPECT_LT(got.at(name).sigma, 0.01 * v) << name;
+  }
 }
 
 // Dead reckoning at the true parameters of a clean run is exact; a wrong gain drifts.

@@ -73,10 +73,22 @@ int RunOf(const Recording& rec, TimeNs t_ns);
 inline constexpr double kRunGapS = 1.0;
 Recording JoinRuns(std::vector<Recording> parts);
 
+// Controls recorded as positions (wheel encoders: cumulative counts, or angles in rad) to
+// the rates the models take: over each interval between samples, the position difference
+// over its duration (exact for the increment), held from the interval's start; the last
+// sample of a run holds its last rate. Counts become radians by 2 pi / counts_per_rev
+// (counts_per_rev 0: the positions are radians, and a joint reported in (-pi, pi] is
+// unwrapped). Never across a run's start. An error names the recording when a run has
+// fewer than two samples.
+void PositionsToRates(double counts_per_rev, Recording* rec);
+
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
-// error); P.csv: header "t,x,y,theta". Times in seconds, any epoch.
+// error); P.csv: header "t,x,y,theta". Times in seconds, any epoch. An optional integer
+// `run` column in both files numbers the runs. `positions`: the controls are wheel
+// positions (encoder counts or angles, PositionsToRates), not checked against the
+// plausible range of the model's rates.
 Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
-                           const KinematicModel& model);
+                           const KinematicModel& model, bool positions = false);
 
 // UTIAS MR.CLAM: DIR/RobotN_Odometry.dat (t v omega) and DIR/RobotN_Groundtruth.dat
 // (t x y theta); '#' starts a comment. Controls are the unicycle model's (v, omega).
