@@ -20,9 +20,11 @@ void RunRates(const ControlSignal& in, int first, int last, double scale, bool u
       if (unwrap && std::abs(d) > std::numbers::pi) d = std::remainder(d, 2 * std::numbers::pi);
       rate[static_cast<size_t>(c)] = scale * d / dt;
     }
-    out->Append(in.ToNs(in.TimeAt(k)), std::span<const double>(rate.data(), static_cast<size_t>(nc)));
+    out->Append(in.ToNs(in.TimeAt(k)),
+                std::span<const double>(rate.data(), static_cast<size_t>(nc)));
   }
-  out->Append(in.ToNs(in.TimeAt(last - 1)), std::span<const double>(rate.data(), static_cast<size_t>(nc)));
+  out->Append(in.ToNs(in.TimeAt(last - 1)),
+              std::span<const double>(rate.data(), static_cast<size_t>(nc)));
 }
 
 }  // namespace

@@ -44,17 +44,19 @@ Status WriteVescYaml(std::ostream& out, const Checkpoint& c, const std::string& 
     return Status::Error("--format vesc: the estimate lacks k_v, k_steer or steer_offset");
   }
   if (!(std::abs(kv) > 1e-6) || !(std::abs(ks) > 1e-6)) {
-    return Status::Error("--format vesc: k_v or k_steer is zero: the car does not follow its "
-                         "commands, nothing to correct");
+    return Status::Error(
+        "--format vesc: k_v or k_steer is zero: the car does not follow its "
+        "commands, nothing to correct");
   }
   const double erpm = nominal.at(kKeys[0]), gain = nominal.at(kKeys[1]),
                offset = nominal.at(kKeys[2]);
-  out << std::setprecision(15) << "# kincal calibration of a car for the VESC driver (vesc.yaml), from "
-      << source << "\n# measured: k_v " << kv << " (sigma " << kv_s << "), k_steer " << ks
-      << " (sigma " << ks_s << "), steer_offset " << off << " rad (sigma " << off_s
+  out << std::setprecision(15)
+      << "# kincal calibration of a car for the VESC driver (vesc.yaml), from " << source
+      << "\n# measured: k_v " << kv << " (sigma " << kv_s << "), k_steer " << ks << " (sigma "
+      << ks_s << "), steer_offset " << off << " rad (sigma " << off_s
       << ")\n# corrected from the values in use: speed_to_erpm_gain " << erpm
-      << ", steering_angle_to_servo_gain " << gain << ", steering_angle_to_servo_offset "
-      << offset << "\n";
+      << ", steering_angle_to_servo_gain " << gain << ", steering_angle_to_servo_offset " << offset
+      << "\n";
   out << "speed_to_erpm_gain: " << erpm / kv << "\n";
   out << "steering_angle_to_servo_gain: " << gain / ks << "\n";
   out << "steering_angle_to_servo_offset: " << offset - gain * off / ks << "\n";
