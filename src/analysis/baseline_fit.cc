@@ -40,6 +40,7 @@ std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, 
   for (int i = from; i < to; ++i) {
     const auto& pi = sys.params()[static_cast<size_t>(i)];
     ParamEstimate e{pi.name, pi.unit, f.p[i], NAN, NAN};
+    e.held = std::find(f.fixed.begin(), f.fixed.end(), i) != f.fixed.end();
     if (f.cov_robust.rows() == f.p.size()) e.sigma = std::sqrt(std::max(0.0, f.cov_robust(i, i)));
     if (f.cov_model.rows() == f.p.size())
       e.sigma_model = std::sqrt(std::max(0.0, f.cov_model(i, i)));

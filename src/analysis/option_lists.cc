@@ -7,17 +7,30 @@
 #include "kincal/effect.h"
 
 namespace kincal {
+namespace {
+
+// Calls `item` on each non-empty comma-separated item of `text`, in order, until one
+// returns an error.
+template <typename Fn>
+Status ForEachItem(std::string_view text, Fn item) {
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t comma = std::min(text.find(',', start), text.size());
+    const std::string_view one = text.substr(start, comma - start);
+    start = comma + 1;
+    if (one.empty()) continue;
+    if (Status s = item(one); !s.ok()) return s;
+  }
+  return {};
+}
+
+}  // namespace
 
 Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
                      std::string_view option) {
   const std::string opt(option);
   out->clear();
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string_view item = text.substr(start, comma - start);
-    start = comma + 1;
-    if (item.empty()) continue;
+  return ForEachItem(text, [&](std::string_view item) -> Status {
     const size_t eq = item.find('=');
     if (eq == std::string_view::npos || eq == 0) {
       return Status::Error(opt + ": expected name=value, got '" + std::string(item) + "'");
@@ -32,18 +45,13 @@ Status ParseInitList(std::string_view text, std::map<std::string, double>* out,
     if (!out->emplace(std::string(item.substr(0, eq)), v).second) {
       return Status::Error(opt + ": '" + std::string(item.substr(0, eq)) + "' is given twice");
     }
-  }
-  return {};
+    return {};
+  });
 }
 
 Status ParseRunList(std::string_view text, std::vector<int>* out) {
   out->clear();
-  size_t start = 0;
-  while (start <= text.size()) {
-    const size_t comma = std::min(text.find(',', start), text.size());
-    const std::string_view item = text.substr(start, comma - start);
-    start = comma + 1;
-    if (item.empty()) continue;
+  return ForEachItem(text, [&](std::string_view item) -> Status {
     int v = 0;
     const auto [end, ec] = std::from_chars(item.data(), item.data() + item.size(), v);
     if (ec != std::errc() || end != item.data() + item.size() || v < 1) {
@@ -54,8 +62,8 @@ Status ParseRunList(std::string_view text, std::vector<int>* out) {
       return Status::Error("--heldout-runs: run " + std::string(item) + " is given twice");
     }
     out->push_back(v);
-  }
-  return {};
+    return {};
+  });
 }
 
 Status ParseEffectList(std::string_view text, std::vector<std::string>* out) {

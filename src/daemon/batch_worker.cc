@@ -57,12 +57,8 @@ BatchCalibration CalibrationFrom(const AnalyzeResult& a, const std::vector<std::
   for (const auto& w : a.warnings) c.warnings += w + "\n";
   const auto n = static_cast<Eigen::Index>(c.params.size());
   bool finite = c.covariance.rows() == n && c.covariance.cols() == n && c.covariance.allFinite();
-  auto held = [&](const std::string& name) {  // robot.fixed: sigma 0 by design
-    return std::any_of(a.after.fixed.begin(), a.after.fixed.end(),
-                       [&](const std::string& f) { return f.rfind(name + "=", 0) == 0; });
-  };
-  for (const auto& p : c.params)
-    finite = finite && std::isfinite(p.value) && (p.sigma > 0 || held(p.name));
+  for (const auto& p : c.params)  // a held parameter (robot.fixed) has sigma 0 by design
+    finite = finite && std::isfinite(p.value) && (p.sigma > 0 || p.held);
   // A fit analyze calls not unique (several optima, or a model that predicts no better
   // than a guess ignoring the commands) is still what the data say, as `kincal analyze`
   // reports it: published, flagged (unique = false, the reason in the warnings), and the

@@ -76,6 +76,7 @@ struct ParamEstimate {
   double value = 0.0;
   double sigma = 0.0;        // cluster-robust 1-sigma
   double sigma_model = 0.0;  // model-based 1-sigma (white-residual assumption)
+  bool held = false;         // held at a given value (--fix): sigma 0 by design
 };
 
 struct ErrorStats {
