@@ -267,6 +267,21 @@ def users_sections(wall, times, counters, counter):
                 f"{wall[n] / 1e6:.2f} | {counter(n, 'messages_per_s'):,.0f} |",
                 "", "The whole command, Python's start-up included (`kincal` runs "
                 "scripts/kincal_import.py with the venv's Python)."]
+    car = {k: [n for n in wall if n.startswith(k)] for k in ("BM_ImportCarBags", "BM_AnalyzeCarRuns")}
+    if any(car.values()):
+        out += ["", "## A car's thirty bags (issue 33: bags to parameters)", "",
+                "| command | wall s | target |", "|---|---|---|"]
+        for key, what, limit in (("BM_ImportCarBags", "kincal import of thirty 4 s ROS 1 bags "
+                                  "(AckermannDriveStamped 20 Hz, PoseStamped 60 Hz; two clocks) "
+                                  "into one log of thirty runs", 5),
+                                 ("BM_AnalyzeCarRuns", "kincal analyze of those thirty runs, "
+                                  "bicycle, --fix wheelbase=0.33, default options", 10)):
+            for n in car[key]:
+                sec = wall[n] / 1e6
+                out.append(f"| {what} | {sec:.2f} | ≤ {limit}: {'met' if sec <= limit else 'NOT met'} |")
+        out += ["", "The bags are written by rosbags' own writer (tests/ros/ros_bags.py, seed 33): "
+                "speed gain 0.95, steering gain 0.6, offset 0.02 rad, a 0.1 s steering lag, command headers "
+                "8,000 s off the pose clock."]
     plan = [n for n in wall if n.startswith("BM_Plan60s")]
     if plan:
         n = plan[0]
