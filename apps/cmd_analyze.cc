@@ -94,33 +94,37 @@ AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
 
 // The recording from the inputs the command line names: one kind of input, each
 // repeated --log (or --controls/--poses pair) one run or more, joined in the order given.
-Recording ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
+StatusOr<Recording> ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
   const auto model = MakeModel(o.model);
   const int sources =
       !a.mrclam.empty() + !a.log.empty() + (!a.controls.empty() || !a.poses.empty());
-  if (sources != 1)
-    throw std::runtime_error("give exactly one of --controls/--poses, --log, --mrclam");
-  std::vector<Recording> parts;
-  if (!a.mrclam.empty()) {
-    if (o.model != "unicycle")
-      throw std::runtime_error("MR.CLAM logs velocity commands: use --model unicycle");
-    parts.push_back(ReadMrclam(a.mrclam, a.robot));
-  } else if (!a.log.empty()) {
-    for (const auto& log : a.log) parts.push_back(ReadLcmLog(log, *model));
-  } else {
-    if (a.controls.size() != a.poses.size())
-      throw std::runtime_error(
-          "--controls and --poses go together: " + std::to_string(a.controls.size()) +
-          " --controls, " + std::to_string(a.poses.size()) + " --poses");
-    for (size_t k = 0; k < a.controls.size(); ++k)
-      parts.push_back(
-          ReadCsvRecording(a.controls[k], a.poses[k], *model, a.controls_kind == "position"));
+  if (sources != 1) return Status::Error("give exactly one of --controls/--poses, --log, --mrclam");
+  if (!a.mrclam.empty() && o.model != "unicycle")
+    return Status::Error("MR.CLAM logs velocity commands: use --model unicycle");
+  if (a.controls.size() != a.poses.size()) {
+    return Status::Error(
+        "--controls and --poses go together: " + std::to_string(a.controls.size()) +
+        " --controls, " + std::to_string(a.poses.size()) + " --poses");
   }
-  Recording rec = JoinRuns(std::move(parts));
-  if (a.controls_kind == "position") PositionsToRates(a.counts_per_rev, &rec);
-  std::cerr << "read " << rec.source << ": " << rec.stats.control_rows << " control rows ("
-            << rec.stats.control_repeated_times << " repeated times), " << rec.stats.pose_rows
-            << " pose rows (" << rec.stats.pose_repeated_times << " repeated times)\n";
+  std::vector<StatusOr<Recording>> read;
+  if (!a.mrclam.empty()) read.push_back(ReadMrclam(a.mrclam, a.robot));
+  for (const auto& log : a.log) read.push_back(ReadLcmLog(log, *model));
+  for (size_t k = 0; k < a.controls.size(); ++k)
+    read.push_back(
+        ReadCsvRecording(a.controls[k], a.poses[k], *model, a.controls_kind == "position"));
+  std::vector<Recording> parts;
+  for (auto& r : read) {
+    if (!r.ok()) return r.status();
+    parts.push_back(std::move(r).value());
+  }
+  StatusOr<Recording> rec = JoinRuns(std::move(parts));
+  if (!rec.ok()) return rec;
+  if (a.controls_kind == "position") {
+    if (const Status s = PositionsToRates(a.counts_per_rev, &rec.value()); !s.ok()) return s;
+  }
+  std::cerr << "read " << rec->source << ": " << rec->stats.control_rows << " control rows ("
+            << rec->stats.control_repeated_times << " repeated times), " << rec->stats.pose_rows
+            << " pose rows (" << rec->stats.pose_repeated_times << " repeated times)\n";
   return rec;
 }
 
@@ -251,9 +255,18 @@ Command AddAnalyze(CLI::App& app) {
       ->capture_default_str();
   return [a]() -> int {
     AnalyzeOptions o = OptionsFrom(a.get());
-    const Recording rec = ReadInput(*a, o);
+    const StatusOr<Recording> rec = ReadInput(*a, o);
+    if (!rec.ok()) {
+      std::cerr << "kincal: error: " << rec.status().message() << "\n";
+      return 1;
+    }
     o.progress = Progress();
-    const AnalyzeResult r = Analyze(rec, o);
+    const StatusOr<AnalyzeResult> result = Analyze(rec.value(), o);
+    if (!result.ok()) {
+      std::cerr << "kincal: error: " << result.status().message() << "\n";
+      return 1;
+    }
+    const AnalyzeResult& r = result.value();
     if (const Status written = WriteAnalysisReport(r, a->out); !written.ok()) {
       std::cerr << "kincal analyze: the report was not written: " << written.message() << "\n";
       return 1;

@@ -62,7 +62,7 @@ std::map<std::string, double> ParseMap(const std::string& text, const char* what
 // defaults' sigma), or a checkpoint's or report's estimate and covariance.
 void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen::MatrixXd* c) {
   const int n = sys.num_params();
-  *p = ParamsFrom(sys, ParseMap(a.init, "--init"), "--init");
+  *p = OrThrow(ParamsFrom(sys, ParseMap(a.init, "--init"), "--init"));
   *c = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < n; ++i)
     c->diagonal()[i] = std::pow(sys.params()[static_cast<size_t>(i)].default_sigma, 2);

@@ -151,7 +151,7 @@ Command AddSimulate(CLI::App& app) {
                  "write the simulated recording as DIR/controls.csv and DIR/poses.csv "
                  "(input for `kincal analyze`)");
   return [args]() -> int {
-    Scenario sc = LoadScenario(args->config);
+    Scenario sc = OrThrow(LoadScenario(args->config));
     if (args->duration_s > 0.0) sc.duration_s = args->duration_s;
     if (args->seed != 0) sc.seed = args->seed;
     if (!args->filter.empty()) sc.filter = args->filter;
@@ -164,8 +164,10 @@ Command AddSimulate(CLI::App& app) {
       throw std::runtime_error(args->config + ": controls.low/high need " + std::to_string(nc) +
                                " values for model " + sc.model);
     }
-    const VecN<kMaxState> p_true = ParamsFrom(truth_sys, sc.truth, args->config + ": truth");
-    const VecN<kMaxState> p_guess = ParamsFrom(est_sys, sc.guess, args->config + ": guess");
+    const VecN<kMaxState> p_true =
+        OrThrow(ParamsFrom(truth_sys, sc.truth, args->config + ": truth"));
+    const VecN<kMaxState> p_guess =
+        OrThrow(ParamsFrom(est_sys, sc.guess, args->config + ": guess"));
     const SimulatedRun run = SimulateScenario(sc, truth_sys, p_true, args->config);
     const auto& meas = run.meas;
     if (!args->export_dir.empty()) ExportRecording(args->export_dir, truth_sys, run);

@@ -4,9 +4,11 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <stdexcept>
 #include <string>
 
 #include "kincal/io/checkpoint.h"
+#include "kincal/status.h"
 
 namespace kincal::app {
 
@@ -19,6 +21,14 @@ inline constexpr long kMaxImagePixels = 64L << 20;
 // Writes a tool's output whole or not at all (kincal/io/output_file.h); throws
 // std::runtime_error with the status's message, which main() prints before exiting 1.
 void WriteOutput(const std::string& path, const std::string& text, const char* what);
+
+// A library function's error as the std::runtime_error a command reports and exits 1 on
+// (main() prints it).
+template <typename T>
+T OrThrow(StatusOr<T> v) {
+  if (!v.ok()) throw std::runtime_error(v.status().message());
+  return std::move(v).value();
+}
 
 // An analyze report.json's final estimate as a checkpoint; its covariance is diagonal (the
 // report keeps only sigma). Throws std::runtime_error naming the file and field.

@@ -81,7 +81,7 @@ void BM_AnalyzeVsLength(benchmark::State& state) {
   o.max_fit_windows = 1 << 30;
   o.max_eval_windows = 1 << 30;
   AnalyzeResult r;
-  for (auto _ : state) r = Analyze(rec, o);
+  for (auto _ : state) r = Analyze(rec, o).value();
   state.counters["recording_s"] = seconds;
   state.counters["poses"] = static_cast<double>(rec.poses.size());
   state.counters["fit_windows"] = r.after.fit_windows;
@@ -120,9 +120,9 @@ void BM_AnalyzeMrclam(benchmark::State& state) {
     state.SkipWithError(("no MR.CLAM data at " + dir).c_str());
     return;
   }
-  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0)));
+  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0))).value();
   AnalyzeResult r;
-  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle"));
+  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle")).value();
   Report(state, r);
   state.counters["poses"] = static_cast<double>(rec.poses.size());
 }
@@ -142,7 +142,7 @@ void BM_AnalyzeDefaultsVsLength(benchmark::State& state) {
   const double seconds = static_cast<double>(state.range(0));
   const Recording rec = UnicycleRecording(seconds);
   AnalyzeResult r;
-  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle"));
+  for (auto _ : state) r = Analyze(rec, UserDefaults("unicycle")).value();
   Report(state, r);
   state.counters["recording_s"] = seconds;
   state.counters["poses"] = static_cast<double>(rec.poses.size());

@@ -182,7 +182,7 @@ void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
     return;
   }
   spdlog::set_level(spdlog::level::warn);
-  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0)));
+  const Recording rec = ReadMrclam(dir, static_cast<int>(state.range(0))).value();
   BatchCalibration last;
   for (auto _ : state) {
     BatchTierOptions o;

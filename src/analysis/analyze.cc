@@ -209,21 +209,36 @@ void JudgeRuns(const Dataset& d, const System& bare, const SelectionState& befor
   res->heldout_dr_after = analysis::HeldOutDeadReckoning(final_sys, after.fit.p, d);
 }
 
-// The model and the effects already in it (o.base_effects); an error names the spec.
-void MakeBaseModel(const AnalyzeOptions& o, std::shared_ptr<const KinematicModel>* model,
-                   std::vector<std::shared_ptr<const Effect>>* base_effects) {
-  if (const Status s = MakeModel(o.model, model); !s.ok()) throw AnalysisError(s.message());
+// An effect from its spec (name[channels]:params) on `model`.
+Status EffectFrom(const std::string& spec_text, const KinematicModel& model,
+                  std::unique_ptr<Effect>* e) {
+  EffectSpec spec;
+  Status st = ParseEffectSpec(spec_text, &spec);
+  if (st.ok()) st = MakeEffect(spec, model, e);
+  return st;
+}
+
+// The model and the effects already in it (o.base_effects); an error names the spec. A
+// user's effect list (--effects) is checked here too, before the selection screens it.
+Status MakeBaseModel(const AnalyzeOptions& o, std::shared_ptr<const KinematicModel>* model,
+                     std::vector<std::shared_ptr<const Effect>>* base_effects) {
+  if (const Status s = MakeModel(o.model, model); !s.ok()) return s;
   for (const auto& spec_text : o.base_effects) {
-    EffectSpec spec;
     std::unique_ptr<Effect> e;
-    Status st = ParseEffectSpec(spec_text, &spec);
-    if (st.ok()) st = MakeEffect(spec, **model, &e);
-    if (!st.ok()) throw AnalysisError("base effects: " + st.message());
+    if (const Status st = EffectFrom(spec_text, **model, &e); !st.ok())
+      return Status::Error("base effects: " + st.message());
     base_effects->push_back(std::move(e));
   }
   if (const Status st = System::CheckCombination(**model, *base_effects, {}); !st.ok()) {
-    throw AnalysisError("base effects: " + st.message());
+    return Status::Error("base effects: " + st.message());
   }
+  if (o.effects_mode != "list") return Status();
+  for (const auto& spec_text : o.effects) {
+    std::unique_ptr<Effect> e;
+    if (const Status st = EffectFrom(spec_text, **model, &e); !st.ok())
+      return Status::Error("--effects: " + st.message());
+  }
+  return Status();
 }
 
 // The rounds of the selection from *current (the baseline): each screens every candidate on
@@ -258,11 +273,37 @@ std::vector<std::string> SelectEffects(const Dataset& d,
   return accepted;
 }
 
+// What the analysis starts from: the bare model, its start point with the held
+// parameters, and the recording cut into windows.
+struct Start {
+  std::shared_ptr<const KinematicModel> model;
+  std::vector<std::shared_ptr<const Effect>> base_effects;
+  Eigen::VectorXd p0;
+  Dataset d;
+};
+
+StatusOr<Start> MakeStart(const Recording& rec, const AnalyzeOptions& o,
+                          std::vector<std::string>* warnings) {
+  std::string error;
+  if (!o.IsValid(&error)) return Status::Error(error);
+  Start s;
+  if (const Status st = MakeBaseModel(o, &s.model, &s.base_effects); !st.ok()) return st;
+  const System bare(s.model, s.base_effects);
+  StatusOr<Eigen::VectorXd> p0 = analysis::InitialParams(bare, o.init);  // unknown names first
+  if (!p0.ok()) return p0.status();
+  s.p0 = std::move(p0).value();
+  StatusOr<std::vector<int>> fixed = analysis::FixParams(bare, o.fixed, &s.p0);
+  if (!fixed.ok()) return fixed.status();
+  StatusOr<Dataset> d = analysis::Prepare(rec, o, warnings);
+  if (!d.ok()) return d.status();
+  s.d = std::move(d).value();
+  s.d.limits.fixed = std::move(fixed).value();
+  return s;
+}
+
 }  // namespace
 
-AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
-  std::string error;
-  if (!o.IsValid(&error)) throw AnalysisError(error);
+StatusOr<AnalyzeResult> Analyze(const Recording& rec, const AnalyzeOptions& o) {
   AnalyzeResult res;
   res.model = o.model;
   res.source = rec.source;
@@ -272,14 +313,11 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   auto progress = [&](double f, const std::string& s) {
     if (o.progress) o.progress(f, s);
   };
-  std::shared_ptr<const KinematicModel> model;
-  std::vector<std::shared_ptr<const Effect>> base_effects;
-  MakeBaseModel(o, &model, &base_effects);
-  const System bare(model, base_effects);  // the model as it stands (bare unless base effects)
-  Eigen::VectorXd p0 = analysis::InitialParams(bare, o.init);  // unknown names first
-  const std::vector<int> fixed = analysis::FixParams(bare, o.fixed, &p0);
-  Dataset d = analysis::Prepare(rec, o, &res.warnings);
-  d.limits.fixed = fixed;
+  StatusOr<Start> start = MakeStart(rec, o, &res.warnings);
+  if (!start.ok()) return start.status();
+  const std::shared_ptr<const KinematicModel> model = start->model;
+  const System bare(model, start->base_effects);  // the model as it stands (bare unless base)
+  Dataset& d = start->d;
   res.pose_sigma = d.sigma;
   res.pose_sigma_estimated = !o.pose_sigma.has_value();
   res.t_begin_s = std::max(d.t.front(), d.t_ctrl0);
@@ -290,7 +328,9 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   progress(0.02, "baseline");
   FitReport base_report;
   SelectionState current;
-  current.fit = analysis::FitBaseline(bare, d, p0, o, &base_report);
+  StatusOr<Fit> base_fit = analysis::FitBaseline(bare, d, start->p0, o, &base_report);
+  if (!base_fit.ok()) return base_fit.status();
+  current.fit = std::move(base_fit).value();
   analysis::ComputeFeatures(&d, bare, current.fit.p);
   const double command_lag = analysis::EstimateCommandLag(d, bare, current.fit.p);
   current.eval = analysis::Evaluate(bare, current.fit.p, d);
@@ -301,13 +341,13 @@ AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& o) {
   if (!res.before.unobservable.empty()) {
     std::string m = rec.source + ": ";
     for (const auto& s : res.before.unobservable) m += s + ". ";
-    throw AnalysisError(m);
+    return Status::Error(m);
   }
   res.diagnosis_before = Diagnose(current.eval.points, d.features, d.horizon);
   res.tests_before = analysis::TestResiduals(current.eval, o.horizon_s);
   res.residual_steps.push_back({"before", current.eval.points});
   current.diagnosis = res.diagnosis_before;
-  current.effects = base_effects;
+  current.effects = start->base_effects;
   const SelectionState baseline = current;
 
   // 2. Selection: each round screens every candidate on top of what was accepted, then

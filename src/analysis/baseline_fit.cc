@@ -92,7 +92,8 @@ std::vector<std::string> Unobservable(const System& sys, const Fit& f) {
   return msgs;
 }
 
-Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init) {
+StatusOr<Eigen::VectorXd> InitialParams(const System& sys,
+                                        const std::map<std::string, double>& init) {
   Eigen::VectorXd p(sys.num_params());
   for (int i = 0; i < sys.num_params(); ++i)
     p[i] = sys.params()[static_cast<size_t>(i)].default_value;
@@ -101,16 +102,16 @@ Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, dou
     if (i < 0) {
       std::string known;
       for (const auto& q : sys.params()) known += (known.empty() ? "" : ", ") + q.name;
-      throw AnalysisError("--init: model '" + std::string(sys.model().name()) +
-                          "' has no parameter '" + name + "' (its parameters: " + known + ")");
+      return Status::Error("--init: model '" + std::string(sys.model().name()) +
+                           "' has no parameter '" + name + "' (its parameters: " + known + ")");
     }
     p[i] = v;
   }
   return p;
 }
 
-std::vector<int> FixParams(const System& sys, const std::map<std::string, double>& fixed,
-                           Eigen::VectorXd* p0) {
+StatusOr<std::vector<int>> FixParams(const System& sys, const std::map<std::string, double>& fixed,
+                                     Eigen::VectorXd* p0) {
   const KinematicModel& model = sys.model();
   std::string known;
   for (const auto& q : model.params()) known += (known.empty() ? "" : ", ") + q.name;
@@ -118,15 +119,15 @@ std::vector<int> FixParams(const System& sys, const std::map<std::string, double
   for (const auto& [name, v] : fixed) {
     const int i = model.ParamIndex(name);
     if (i < 0) {
-      throw AnalysisError("--fix: model '" + std::string(model.name()) + "' has no parameter '" +
-                          name + "' (its parameters: " + known + ")");
+      return Status::Error("--fix: model '" + std::string(model.name()) + "' has no parameter '" +
+                           name + "' (its parameters: " + known + ")");
     }
     (*p0)[i] = v;
     idx.push_back(i);
   }
   if (!idx.empty() && static_cast<int>(idx.size()) == model.num_params()) {
-    throw AnalysisError("--fix: every parameter of model '" + std::string(model.name()) +
-                        "' is fixed (" + known + "): nothing is left to calibrate");
+    return Status::Error("--fix: every parameter of model '" + std::string(model.name()) +
+                         "' is fixed (" + known + "): nothing is left to calibrate");
   }
   std::sort(idx.begin(), idx.end());
   return idx;
@@ -264,8 +265,8 @@ std::vector<Fit> OkByCost(std::vector<Fit> fits) {
 
 // Multi-start, staged fit of the bare model: short windows from many starts, then the best
 // refined on full windows. Reports when distinct optima fit equally well.
-Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
-                const AnalyzeOptions& o, FitReport* report) {
+StatusOr<Fit> FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
+                          const AnalyzeOptions& o, FitReport* report) {
   const auto& u = d.rec->controls;
   const std::vector<Eigen::VectorXd> starts = BaselineStarts(sys, p0, d.limits.fixed, o.seed);
   // The starts in parallel, each solve on one thread: the result does not depend on the
@@ -277,9 +278,9 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
   });
   const std::vector<Fit> stage1 = OkByCost(std::move(fits));
   if (stage1.empty())
-    throw AnalysisError(
-        "baseline fit failed from every start: check that the controls drive the model (units, "
-        "column order)");
+    return Status::Error(d.rec->source +
+                         ": the baseline fit failed from every start: check that the controls "
+                         "drive the model (units, column order)");
   // Refine the best few distinct optima on the full windows (in parallel).
   const std::vector<const Fit*> seeds = DistinctSeeds(stage1);
   std::vector<Fit> tops(seeds.size());
@@ -287,7 +288,7 @@ Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
     tops[k] = RunFit(sys, u, d.fit_meas, seeds[k]->p, d.limits, true, 1);
   });
   const std::vector<Fit> refined = OkByCost(std::move(tops));
-  if (refined.empty()) throw AnalysisError("baseline refinement failed");
+  if (refined.empty()) return Status::Error(d.rec->source + ": the baseline refinement failed");
   CheckUnique(sys, refined, report);
   return refined.front();
 }

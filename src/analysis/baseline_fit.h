@@ -33,16 +33,18 @@ Fit RunFit(const System& sys, const ControlSignal& u, const std::vector<PoseMeas
 std::vector<ParamEstimate> Estimates(const System& sys, const Fit& f, int from, int to);
 // Parameters the information matrix cannot pin down, one sentence each.
 std::vector<std::string> Unobservable(const System& sys, const Fit& f);
-// The model's defaults with the user's --init values; throws AnalysisError on an unknown name.
-Eigen::VectorXd InitialParams(const System& sys, const std::map<std::string, double>& init);
-// The indices of the --fix parameters, their values set in *p0; throws AnalysisError on a
-// name that is not one of the model's parameters, or when every one of them is fixed.
-std::vector<int> FixParams(const System& sys, const std::map<std::string, double>& fixed,
-                           Eigen::VectorXd* p0);
+// The model's defaults with the user's --init values; an error names an unknown name.
+StatusOr<Eigen::VectorXd> InitialParams(const System& sys,
+                                        const std::map<std::string, double>& init);
+// The indices of the --fix parameters, their values set in *p0; an error names a name that
+// is not one of the model's parameters, or says that every one of them is fixed.
+StatusOr<std::vector<int>> FixParams(const System& sys, const std::map<std::string, double>& fixed,
+                                     Eigen::VectorXd* p0);
 // Weakly determined parameters of a fit (FitReport::weak).
 std::vector<std::string> WeaklyDetermined(const System& sys, const Fit& f);
-// The bare model's fit; *report says whether the optimum was unique.
-Fit FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
-                const AnalyzeOptions& o, FitReport* report);
+// The bare model's fit; *report says whether the optimum was unique. An error when no start
+// converges.
+StatusOr<Fit> FitBaseline(const System& sys, const Dataset& d, const Eigen::VectorXd& p0,
+                          const AnalyzeOptions& o, FitReport* report);
 
 }  // namespace kincal::analysis

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "kincal/check.h"
+
 namespace kincal::analysis {
 namespace {
 
@@ -106,9 +108,11 @@ bool ScreenEffect(const std::string& spec, const SelectionState& current, const 
   std::unique_ptr<Effect> made;
   Status status = ParseEffectSpec(spec, &parsed);
   if (status.ok()) status = MakeEffect(parsed, *model, &made);
+  // A candidate that does not apply (a user's list was checked by Analyze before the
+  // selection started: KINCAL_CHECK).
   if (!status.ok()) {
-    if (!user_list) return false;  // a candidate that does not apply
-    throw AnalysisError("--effects: " + status.message());
+    KINCAL_CHECK(!user_list, status.message().c_str());
+    return false;
   }
   const std::shared_ptr<const Effect> eff = std::move(made);
   std::vector<std::shared_ptr<const Effect>> effects = current.effects;

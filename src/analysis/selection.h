@@ -60,7 +60,8 @@ struct Screened {
 // current parameters with the effect's defaults, or with its parameters of the last round
 // when it was tried before; the command lag for timing effects; +-2 sigma for a single new
 // parameter tried for the first time). False when the effect cannot be made or combined
-// (from a user's effect list, `user_list`, a bad spec throws AnalysisError instead).
+// (a user's effect list, `user_list`, is checked before the selection: a bad spec there is
+// a bug).
 // Each solve runs on one thread: candidates are screened in parallel instead.
 bool ScreenEffect(const std::string& spec, const SelectionState& current, const Dataset& d,
                   const std::shared_ptr<const KinematicModel>& model, double command_lag,

@@ -3,11 +3,19 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <stdexcept>
 
 #include "kincal/angles.h"
 
 namespace kincal::analysis {
 namespace {
+
+// What cutting the recording throws when it is unusable; caught in Prepare, which returns
+// it as a Status.
+class DataError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 // A window whose horizon end lands more than this fraction of the horizon (plus 1 ms)
 // past the nearest pose spans a gap and is not used.
@@ -61,7 +69,7 @@ void SetRuns(const Recording& rec, const AnalyzeOptions& o, Dataset* d) {
   const int n = static_cast<int>(rec.runs.size());
   if (n < 2) {
     if (!o.heldout_runs.empty())
-      throw AnalysisError(rec.source + ": --heldout-runs: the recording is one run");
+      throw DataError(rec.source + ": --heldout-runs: the recording is one run");
     return;
   }
   d->by_runs = true;
@@ -73,8 +81,8 @@ void SetRuns(const Recording& rec, const AnalyzeOptions& o, Dataset* d) {
   d->run_heldout.assign(static_cast<size_t>(n), false);
   for (int k : o.heldout_runs) {
     if (k < 1 || k > n) {
-      throw AnalysisError(rec.source + ": --heldout-runs: no run " + std::to_string(k) +
-                          " (the recording has runs 1.." + std::to_string(n) + ")");
+      throw DataError(rec.source + ": --heldout-runs: no run " + std::to_string(k) +
+                      " (the recording has runs 1.." + std::to_string(n) + ")");
     }
     d->run_heldout[static_cast<size_t>(k - 1)] = true;
   }
@@ -83,7 +91,7 @@ void SetRuns(const Recording& rec, const AnalyzeOptions& o, Dataset* d) {
       d->run_heldout[static_cast<size_t>(r)] = n == 2 ? r == 1 : r % 3 == 2;
   }
   if (std::all_of(d->run_heldout.begin(), d->run_heldout.end(), [](bool h) { return h; }))
-    throw AnalysisError(rec.source + ": --heldout-runs holds out every run; none is left to fit");
+    throw DataError(rec.source + ": --heldout-runs holds out every run; none is left to fit");
 }
 
 int FindEnd(const Dataset& d, int i, double h) {
@@ -179,8 +187,8 @@ void CountShortRuns(const Dataset& d, std::vector<std::string>* warnings) {
     which += (which.empty() ? "" : ", ") + std::to_string(r + 1);
   }
   if (skipped == static_cast<int>(windows.size())) {
-    throw AnalysisError(d.rec->source + ": every run is shorter than one prediction window (" +
-                        std::to_string(d.horizon) + " s); lower --horizon");
+    throw DataError(d.rec->source + ": every run is shorter than one prediction window (" +
+                    std::to_string(d.horizon) + " s); lower --horizon");
   }
   if (skipped > 0) {
     warnings->push_back(std::to_string(skipped) + " run(s) shorter than one prediction window (" +
@@ -214,14 +222,17 @@ bool Dataset::HeldOutAt(double t_s) const {
   return run_heldout[r];
 }
 
-Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::string>* warnings) {
+namespace {
+
+Dataset PrepareOrThrow(const Recording& rec, const AnalyzeOptions& o,
+                       std::vector<std::string>* warnings) {
   Dataset d;
   d.rec = &rec;
   d.horizon = o.horizon_s;
   if (rec.poses.size() < kMinPoses)
-    throw AnalysisError(rec.source + ": only " + std::to_string(rec.poses.size()) +
-                        " poses; at least " + std::to_string(kMinPoses) + " are needed");
-  if (rec.controls.size() < 2) throw AnalysisError(rec.source + ": fewer than 2 control samples");
+    throw DataError(rec.source + ": only " + std::to_string(rec.poses.size()) +
+                    " poses; at least " + std::to_string(kMinPoses) + " are needed");
+  if (rec.controls.size() < 2) throw DataError(rec.source + ": fewer than 2 control samples");
   for (const auto& p : rec.poses) d.t.push_back(rec.controls.ToSeconds(p.t_ns));
   d.t_ctrl0 = rec.controls.TimeAt(0);
   d.t_ctrl1 = rec.controls.TimeAt(static_cast<int>(rec.controls.size()) - 1);
@@ -231,7 +242,7 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     std::ostringstream m;
     m << rec.source << ": controls and poses overlap for only " << std::max(0.0, t1 - t0)
       << " s; at least 4 horizons (" << 4.0 * o.horizon_s << " s) are needed";
-    throw AnalysisError(m.str());
+    throw DataError(m.str());
   }
   if (d.t_ctrl0 > d.t.front() + 1.0) {
     std::ostringstream m;
@@ -254,15 +265,15 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
   d.short_windows =
       NonOverlapping(d, hs, t0, d.t_split, std::min(kMaxShortWindows, o.max_fit_windows));
   if (d.fit_windows.size() < 5)
-    throw AnalysisError(rec.source +
-                        ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
-                        "shorter than a few horizons)");
+    throw DataError(rec.source +
+                    ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
+                    "shorter than a few horizons)");
   int held = 0;
   for (const auto& w : d.eval) held += d.HeldOutAt(d.t[static_cast<size_t>(w.start)]);
   if (held < 5)
-    throw AnalysisError(rec.source + ": fewer than 5 prediction windows in the held-out part; " +
-                        (d.by_runs ? "hold out other runs (--heldout-runs) or lower --horizon"
-                                   : "lower --fit-fraction or --horizon"));
+    throw DataError(rec.source + ": fewer than 5 prediction windows in the held-out part; " +
+                    (d.by_runs ? "hold out other runs (--heldout-runs) or lower --horizon"
+                               : "lower --fit-fraction or --horizon"));
   d.fit_meas = WindowMeasurements(d, d.fit_windows, o.poses_per_window);
   d.short_meas = WindowMeasurements(d, d.short_windows, std::max(2, o.poses_per_window / 2));
   d.screen_meas = d.fit_meas;
@@ -274,6 +285,17 @@ Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::
     d.screen_meas = WindowMeasurements(d, every, o.poses_per_window);
   }
   return d;
+}
+
+}  // namespace
+
+StatusOr<Dataset> Prepare(const Recording& rec, const AnalyzeOptions& o,
+                          std::vector<std::string>* warnings) {
+  try {
+    return PrepareOrThrow(rec, o, warnings);
+  } catch (const DataError& e) {
+    return Status::Error(e.what());
+  }
 }
 
 }  // namespace kincal::analysis

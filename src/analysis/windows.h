@@ -56,9 +56,10 @@ struct Dataset {
   bool HeldOutAt(double t_s) const;
 };
 
-// Cuts the recording into windows; throws AnalysisError naming the recording when it is too
-// short or its controls and poses do not overlap enough. Pose sigmas are estimated from
-// second differences unless the options give them.
-Dataset Prepare(const Recording& rec, const AnalyzeOptions& o, std::vector<std::string>* warnings);
+// Cuts the recording into windows; an error names the recording when it is too short or its
+// controls and poses do not overlap enough. Pose sigmas are estimated from second
+// differences unless the options give them.
+StatusOr<Dataset> Prepare(const Recording& rec, const AnalyzeOptions& o,
+                          std::vector<std::string>* warnings);
 
 }  // namespace kincal::analysis

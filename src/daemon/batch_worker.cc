@@ -185,14 +185,14 @@ std::optional<BatchCalibration> BatchWorker::WaitUnlessCancelled() {
 
 BatchCalibration BatchWorker::Run(const Recording& data, const AnalyzeOptions& options) {
   try {
-    return CalibrationFrom(Analyze(data, options), options.base_effects);
-  } catch (const Cancelled& e) {
+    StatusOr<AnalyzeResult> result = Analyze(data, options);
+    if (result.ok()) return CalibrationFrom(result.value(), options.base_effects);
+    BatchCalibration r;  // too little or unsuitable data; a solver's failure
+    r.error = result.status().message();
+    return r;
+  } catch (const Cancelled& e) {  // thrown by this file's progress callback
     BatchCalibration r;
     r.cancelled = true;
-    r.error = e.what();
-    return r;
-  } catch (const std::exception& e) {  // too little or unsuitable data; a solver's failure
-    BatchCalibration r;
     r.error = e.what();
     return r;
   }

@@ -79,7 +79,9 @@ std::map<std::string, double> GuessByName(const System& sys, const FilterPrior& 
 
 FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const std::string& file) {
   const int np = sys.num_params();
-  FilterPrior p{ParamsFrom(sys, robot.guess, file + ": robot.guess"), StateMat::Zero(np, np)};
+  // robot.guess names only parameters of the model (DaemonConfig::IsValid): an error is a bug.
+  FilterPrior p{ParamsFrom(sys, robot.guess, file + ": robot.guess").value(),
+                StateMat::Zero(np, np)};
   for (int i = 0; i < np; ++i) {
     const double s =
         robot.guess_sigma_fraction *

@@ -19,13 +19,20 @@
 namespace kincal::daemon {
 namespace {
 
+// A value, or its error as the std::runtime_error the constructor below reports with.
+template <typename T>
+T OrThrow(StatusOr<T> v) {
+  if (!v.ok()) throw std::runtime_error(v.status().message());
+  return std::move(v).value();
+}
+
 class SimSource final : public FrameSource {
  public:
   SimSource(const SimSourceOptions& c, const VisionSetup& v, ControlIntake controls,
             NetworkPublish publish, DriveLink* drive)
       : cfg_(c),
         vis_(v),
-        sc_(LoadScenario(c.sim.scenario)),
+        sc_(OrThrow(LoadScenario(c.sim.scenario))),
         truth_(MakeSystem(sc_.model, sc_.hidden_effects)),
         intake_(std::move(controls)),
         publish_(std::move(publish)),
@@ -43,7 +50,7 @@ class SimSource final : public FrameSource {
       throw std::runtime_error(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
                                " values");
     }
-    p_true_ = ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth");
+    p_true_ = OrThrow(ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth"));
     if (sc_.profile != "smooth" && sc_.profile != "piecewise")
       throw std::runtime_error(c.sim.scenario + ": controls.profile must be smooth or piecewise");
     end_ = SecondsToNs(c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s);

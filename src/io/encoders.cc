@@ -29,7 +29,7 @@ void RunRates(const ControlSignal& in, int first, int last, double scale, bool u
 
 }  // namespace
 
-void PositionsToRates(double counts_per_rev, Recording* rec) {
+Status PositionsToRates(double counts_per_rev, Recording* rec) {
   const ControlSignal& in = rec->controls;
   const double scale = counts_per_rev > 0 ? 2 * std::numbers::pi / counts_per_rev : 1.0;
   ControlSignal out(in.num_channels(), in.origin_ns());
@@ -40,13 +40,14 @@ void PositionsToRates(double counts_per_rev, Recording* rec) {
     int last = first + 1;
     while (last < n && RunOf(*rec, in.ToNs(in.TimeAt(last))) == run) ++last;
     if (last - first < 2) {
-      throw RecordingError(rec->source + ": run " + std::to_string(run + 1) +
+      return Status::Error(rec->source + ": run " + std::to_string(run + 1) +
                            " has one control sample: positions need two to give a rate");
     }
     RunRates(in, first, last, scale, counts_per_rev <= 0, &out);
     first = last;
   }
   rec->controls = std::move(out);
+  return Status();
 }
 
 }  // namespace kincal

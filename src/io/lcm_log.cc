@@ -17,6 +17,13 @@ namespace kincal {
 
 namespace {
 
+// What the decoders below throw on bad input; caught in ReadLcmLog, which returns it as a
+// Status.
+class ReadError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 constexpr const char* kRunChannel = "KINCAL_RUN";
 
 struct TimedControls {
@@ -31,10 +38,10 @@ TimedControls DecodeControls(const LcmLogEvent& ev, const std::string& where,
   kincal::controls_t m;
   std::string why;
   if (!PlausibleControls(ev.data.data(), ev.data.size(), kMaxControls, &why)) {
-    throw RecordingError(where + " on " + ev.channel + ": " + why);
+    throw ReadError(where + " on " + ev.channel + ": " + why);
   }
   if (m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) < 0) {
-    throw RecordingError(where + " on " + ev.channel + ": not a kincal.controls_t");
+    throw ReadError(where + " on " + ev.channel + ": not a kincal.controls_t");
   }
   // Map the recorded channel names onto the model's control order.
   std::vector<double> v(static_cast<size_t>(model.num_controls()), 0.0);
@@ -44,17 +51,15 @@ TimedControls DecodeControls(const LcmLogEvent& ev, const std::string& where,
     const double value = m.values[static_cast<size_t>(i)];
     const int k = model.ControlIndex(name);
     if (k < 0) {
-      throw RecordingError(where + ": control '" + name + "' is not a control of model '" +
-                           std::string(model.name()) + "'");
+      throw ReadError(where + ": control '" + name + "' is not a control of model '" +
+                      std::string(model.name()) + "'");
     }
-    if (!std::isfinite(value))
-      throw RecordingError(where + ": control '" + name + "' is not finite");
+    if (!std::isfinite(value)) throw ReadError(where + ": control '" + name + "' is not finite");
     v[static_cast<size_t>(k)] = value;
     seen[static_cast<size_t>(k)] = true;
   }
   for (size_t k = 0; k < seen.size(); ++k) {
-    if (!seen[k])
-      throw RecordingError(where + ": control '" + model.controls()[k].name + "' missing");
+    if (!seen[k]) throw ReadError(where + ": control '" + model.controls()[k].name + "' missing");
   }
   return {static_cast<double>(m.utime) * 1e-6, std::move(v)};
 }
@@ -63,11 +68,11 @@ TimedControls DecodeControls(const LcmLogEvent& ev, const std::string& where,
 std::optional<TimedPose> DecodePose(const LcmLogEvent& ev, const std::string& where) {
   kincal::pose_t m;
   if (m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) < 0) {
-    throw RecordingError(where + " on " + ev.channel + ": not a kincal.pose_t");
+    throw ReadError(where + " on " + ev.channel + ": not a kincal.pose_t");
   }
   if (!m.valid) return std::nullopt;
   const Eigen::Vector3d z(m.x, m.y, m.theta);
-  if (!z.allFinite()) throw RecordingError(where + ": pose is not finite");
+  if (!z.allFinite()) throw ReadError(where + ": pose is not finite");
   return TimedPose{static_cast<double>(m.utime) * 1e-6, z};
 }
 
@@ -75,7 +80,7 @@ std::optional<TimedPose> DecodePose(const LcmLogEvent& ev, const std::string& wh
 RecordingRun DecodeRun(const LcmLogEvent& ev, const std::string& where, double* start_s) {
   kincal::run_t m;
   if (m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) < 0) {
-    throw RecordingError(where + " on " + ev.channel + ": not a kincal.run_t");
+    throw ReadError(where + " on " + ev.channel + ": not a kincal.run_t");
   }
   *start_s = static_cast<double>(m.utime) * 1e-6;
   return {0, m.source};
@@ -88,9 +93,9 @@ void PlaceRuns(const std::vector<std::pair<double, RecordingRun>>& runs, const s
     RecordingRun r = run;
     r.start_ns = SecondsToNs(t - rec->origin_s);
     if (!rec->runs.empty() && r.start_ns <= rec->runs.back().start_ns) {
-      throw RecordingError(path + ": run " + std::to_string(rec->runs.size() + 1) +
-                           " starts before run " + std::to_string(rec->runs.size()) +
-                           " (runs must be in time order)");
+      throw ReadError(path + ": run " + std::to_string(rec->runs.size() + 1) +
+                      " starts before run " + std::to_string(rec->runs.size()) +
+                      " (runs must be in time order)");
     }
     rec->runs.push_back(r);
   }
@@ -132,17 +137,15 @@ Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> p
   return rec;
 }
 
-}  // namespace
-
-Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
-                     const std::string& controls_channel, const std::string& pose_channel) {
+Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model,
+                            const std::string& controls_channel, const std::string& pose_channel) {
   struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw RecordingError(path + ": cannot open for reading");
+  if (::stat(path.c_str(), &st) != 0) throw ReadError(path + ": cannot open for reading");
   std::optional<LcmLogReader> log;
   try {
     log.emplace(path);
   } catch (const std::runtime_error& e) {
-    throw RecordingError(e.what());
+    throw ReadError(e.what());
   }
   std::vector<TimedControls> controls;
   std::vector<TimedPose> poses;
@@ -161,8 +164,8 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
       runs.emplace_back(t, std::move(r));
     }
   }
-  if (controls.empty()) throw RecordingError(path + ": no controls on channel " + controls_channel);
-  if (poses.empty()) throw RecordingError(path + ": no poses on channel " + pose_channel);
+  if (controls.empty()) throw ReadError(path + ": no controls on channel " + controls_channel);
+  if (poses.empty()) throw ReadError(path + ": no poses on channel " + pose_channel);
   Recording rec = Assemble(std::move(controls), std::move(poses), model, path);
   PlaceRuns(runs, path, &rec);
   // Damage is not fatal (the rest of the log is still good) but never silent.
@@ -173,6 +176,18 @@ Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
                            " bytes skipped");
   }
   return rec;
+}
+
+}  // namespace
+
+StatusOr<Recording> ReadLcmLog(const std::string& path, const KinematicModel& model,
+                               const std::string& controls_channel,
+                               const std::string& pose_channel) {
+  try {
+    return ReadLcmLogOrThrow(path, model, controls_channel, pose_channel);
+  } catch (const ReadError& e) {
+    return Status::Error(e.what());
+  }
 }
 
 }  // namespace kincal

@@ -12,9 +12,26 @@
 #include <sstream>
 
 #include "kincal/angles.h"
+#include "kincal/text.h"
 
 namespace kincal {
 namespace {
+
+// What the readers below throw on bad input; caught in this file's public functions, which
+// return it as a Status.
+class ReadError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+template <typename F>
+StatusOr<Recording> Catching(F&& read) {
+  try {
+    return read();
+  } catch (const ReadError& e) {
+    return Status::Error(e.what());
+  }
+}
 
 struct Row {
   int line;
@@ -30,8 +47,8 @@ long long ParseRun(const std::string& tok, const std::string& where) {
   long long v = 0;
   const auto [p, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v);
   if (ec != std::errc() || p != tok.data() + tok.size()) {
-    throw RecordingError(where + ": column 'run': expected an integer run number, got '" + tok +
-                         "'");
+    throw ReadError(where + ": column 'run': expected an integer run number, got '" + Escaped(tok) +
+                    "'");
   }
   return v;
 }
@@ -69,7 +86,7 @@ double ParseNumber(const std::string& tok, const std::string& where, const std::
   const char* e = tok.data() + tok.size();
   auto [p, ec] = std::from_chars(b, e, v);
   if (ec != std::errc() || p != e || !std::isfinite(v)) {
-    throw RecordingError(where + ": " + what + ": expected a finite number, got '" + tok + "'");
+    throw ReadError(where + ": " + what + ": expected a finite number, got '" + Escaped(tok) + "'");
   }
   return v;
 }
@@ -77,29 +94,31 @@ double ParseNumber(const std::string& tok, const std::string& where, const std::
 std::ifstream Open(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
-    throw RecordingError(path + ": cannot open for reading: " + std::strerror(errno));
+    throw ReadError(path + ": cannot open for reading: " + std::strerror(errno));
   }
-  if (S_ISDIR(st.st_mode)) throw RecordingError(path + ": is a directory, expected a text file");
+  if (S_ISDIR(st.st_mode)) throw ReadError(path + ": is a directory, expected a text file");
   std::ifstream in(path);
-  if (!in) throw RecordingError(path + ": cannot open for reading: " + std::strerror(errno));
+  if (!in) throw ReadError(path + ": cannot open for reading: " + std::strerror(errno));
   return in;
 }
 
 // std::getline with a bound: memory stays bounded whatever the file (a line of /dev/zero
 // never ends). False at the end of the file; throws naming the line when it is too long.
+// A CRLF line ending and, on line 1, a UTF-8 byte-order mark are taken (text.h).
 bool ReadLine(std::istream& in, std::string* line, const std::string& path, int n) {
   line->clear();
   char ch;
   bool any = false;
   while (in.get(ch)) {
     any = true;
-    if (ch == '\n') return true;
+    if (ch == '\n') break;
     if (line->size() >= kMaxRecordingLineBytes) {
-      throw RecordingError(path + ":" + std::to_string(n) + ": line longer than " +
-                           std::to_string(kMaxRecordingLineBytes) + " bytes: not a text recording");
+      throw ReadError(path + ":" + std::to_string(n) + ": line longer than " +
+                      std::to_string(kMaxRecordingLineBytes) + " bytes: not a text recording");
     }
     line->push_back(ch);
   }
+  if (any) CleanLine(line, n == 1);
   return any;
 }
 
@@ -112,7 +131,7 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
   std::map<std::string, int> index;
   for (size_t i = 0; i < cols.size(); ++i) {
     if (index.count(cols[i]))
-      throw RecordingError(where + ": column '" + cols[i] + "' appears twice");
+      throw ReadError(where + ": column '" + Escaped(cols[i]) + "' appears twice");
     index[cols[i]] = static_cast<int>(i);
   }
   std::string expected = "t";
@@ -122,15 +141,15 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
   if (index.count(kRunColumn)) *run_col = index[kRunColumn];
   for (const auto& w : all) {
     if (!index.count(w)) {
-      throw RecordingError(where + ": header lacks column '" + w + "' (expected header '" +
-                           expected + "')");
+      throw ReadError(where + ": header lacks column '" + w + "' (expected header '" + expected +
+                      "')");
     }
     order.push_back(index[w]);
   }
   for (const auto& c : cols) {
     if (c != kRunColumn && std::find(all.begin(), all.end(), c) == all.end()) {
-      throw RecordingError(where + ": unexpected column '" + c + "' (expected header '" + expected +
-                           "')");
+      throw ReadError(where + ": unexpected column '" + Escaped(c) + "' (expected header '" +
+                      expected + "')");
     }
   }
   return order;
@@ -158,8 +177,8 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     }
     const size_t columns = order.size() + (run_col >= 0 ? 1 : 0);
     if (cols.size() != columns) {
-      throw RecordingError(where + ": expected " + std::to_string(columns) + " values, found " +
-                           std::to_string(cols.size()));
+      throw ReadError(where + ": expected " + std::to_string(columns) + " values, found " +
+                      std::to_string(cols.size()));
     }
     Row r{n, 0.0, {}};
     r.t = ParseNumber(cols[static_cast<size_t>(order[0])], where, "column 't'");
@@ -170,7 +189,7 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     if (run_col >= 0) r.run = ParseRun(cols[static_cast<size_t>(run_col)], where);
     rows.push_back(std::move(r));
   }
-  if (order.empty()) throw RecordingError(path + ": empty file (no header)");
+  if (order.empty()) throw ReadError(path + ": empty file (no header)");
   *has_run = run_col >= 0;
   return rows;
 }
@@ -192,8 +211,8 @@ std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
     const auto cols = Split(line, true);
     const std::string where = path + ":" + std::to_string(n);
     if (static_cast<int>(cols.size()) != columns) {
-      throw RecordingError(where + ": expected " + std::to_string(columns) + " values, found " +
-                           std::to_string(cols.size()));
+      throw ReadError(where + ": expected " + std::to_string(columns) + " values, found " +
+                      std::to_string(cols.size()));
     }
     Row r{n, ParseNumber(cols[0], where, "time"), {}};
     for (int k = 1; k < columns; ++k)
@@ -217,7 +236,7 @@ void CheckRange(const Row& r, const std::string& path, const std::string& column
   m.precision(15);
   m << path << ":" << r.line << ": column '" << column << "': " << value << " is beyond +-" << limit
     << " (" << expected << ")";
-  throw RecordingError(m.str());
+  throw ReadError(m.str());
 }
 
 // Every value within its plausible range: time, then `limits[i]` for column `names[i]`.
@@ -232,7 +251,7 @@ void CheckRanges(const std::vector<Row>& rows, const std::string& path,
 }
 
 void CheckOrder(const std::vector<Row>& rows, const std::string& path, const char* what) {
-  if (rows.empty()) throw RecordingError(path + ": no " + std::string(what) + " rows");
+  if (rows.empty()) throw ReadError(path + ": no " + std::string(what) + " rows");
   for (size_t i = 1; i < rows.size(); ++i) {
     if (rows[i].t < rows[i - 1].t) {
       std::ostringstream m;
@@ -240,7 +259,7 @@ void CheckOrder(const std::vector<Row>& rows, const std::string& path, const cha
       m << path << ":" << rows[i].line << ": time " << rows[i].t
         << " goes backwards (previous row, line " << rows[i - 1].line << ", has " << rows[i - 1].t
         << "); " << what << " rows must be in time order";
-      throw RecordingError(m.str());
+      throw ReadError(m.str());
     }
   }
 }
@@ -261,7 +280,7 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
     m.precision(15);
     m << cpath << " and " << ppath << ": time spans do not overlap (controls " << c0 << ".." << c1
       << " s, poses " << p0 << ".." << p1 << " s): both files must share one time base";
-    throw RecordingError(m.str());
+    throw ReadError(m.str());
   }
   auto to_ns = [&](double t) { return SecondsToNs(t - rec.origin_s); };
   rec.controls = ControlSignal(num_controls, 0);
@@ -304,8 +323,8 @@ Recording AssembleRuns(const std::vector<Row>& controls, const std::vector<Row>&
   }
   for (const Row& r : poses) {
     if (!by_run.count(r.run)) {
-      throw RecordingError(ppath + ":" + std::to_string(r.line) + ": run " + std::to_string(r.run) +
-                           " has poses but no controls in " + cpath);
+      throw ReadError(ppath + ":" + std::to_string(r.line) + ": run " + std::to_string(r.run) +
+                      " has poses but no controls in " + cpath);
     }
     by_run[r.run].second.push_back(r);
   }
@@ -313,22 +332,21 @@ Recording AssembleRuns(const std::vector<Row>& controls, const std::vector<Row>&
   for (long long run : order) {
     const auto& [c, p] = by_run[run];
     if (p.empty()) {
-      throw RecordingError(cpath + ": run " + std::to_string(run) +
-                           " has controls but no poses in " + ppath);
+      throw ReadError(cpath + ": run " + std::to_string(run) + " has controls but no poses in " +
+                      ppath);
     }
     const std::string which = " (run " + std::to_string(run) + ")";
     parts.push_back(
         Assemble(cpath + " + " + ppath + which, c, p, num_controls, cpath + which, ppath + which));
   }
-  Recording rec = JoinRuns(std::move(parts));
-  rec.source = cpath + " + " + ppath;
-  return rec;
+  StatusOr<Recording> rec = JoinRuns(std::move(parts));
+  if (!rec.ok()) throw ReadError(rec.status().message());
+  rec->source = cpath + " + " + ppath;
+  return std::move(rec).value();
 }
 
-}  // namespace
-
-Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
-                           const KinematicModel& model, bool positions) {
+Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& poses_csv,
+                         const KinematicModel& model, bool positions) {
   std::vector<std::string> names;
   for (const auto& c : model.controls()) names.push_back(c.name);
   bool control_runs = false, pose_runs = false;
@@ -345,9 +363,9 @@ Recording ReadCsvRecording(const std::string& controls_csv, const std::string& p
   CheckRanges(poses, poses_csv, {"x", "y", "theta"}, {kMaxAbsPositionM, kMaxAbsPositionM, 1e6},
               {"metres", "metres", "radians"});
   if (control_runs != pose_runs) {
-    throw RecordingError((control_runs ? controls_csv : poses_csv) + " has a 'run' column and " +
-                         (control_runs ? poses_csv : controls_csv) +
-                         " has none: number the runs in both files");
+    throw ReadError((control_runs ? controls_csv : poses_csv) + " has a 'run' column and " +
+                    (control_runs ? poses_csv : controls_csv) +
+                    " has none: number the runs in both files");
   }
   if (control_runs)
     return AssembleRuns(controls, poses, model.num_controls(), controls_csv, poses_csv);
@@ -355,8 +373,8 @@ Recording ReadCsvRecording(const std::string& controls_csv, const std::string& p
                   controls_csv, poses_csv);
 }
 
-Recording ReadMrclam(const std::string& dir, int robot) {
-  if (robot < 1) throw RecordingError("MR.CLAM robot number must be >= 1");
+Recording ReadMrclamOrThrow(const std::string& dir, int robot) {
+  if (robot < 1) throw ReadError("MR.CLAM robot number must be >= 1");
   const std::string base = dir + "/Robot" + std::to_string(robot);
   int comments = 0;
   const auto odo = ReadDat(base + "_Odometry.dat", 3, &comments);
@@ -369,6 +387,17 @@ Recording ReadMrclam(const std::string& dir, int robot) {
                            base + "_Odometry.dat", base + "_Groundtruth.dat");
   rec.stats.comment_lines = comments;
   return rec;
+}
+
+}  // namespace
+
+StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
+                                     const KinematicModel& model, bool positions) {
+  return Catching([&] { return ReadCsvOrThrow(controls_csv, poses_csv, model, positions); });
+}
+
+StatusOr<Recording> ReadMrclam(const std::string& dir, int robot) {
+  return Catching([&] { return ReadMrclamOrThrow(dir, robot); });
 }
 
 int RunOf(const Recording& rec, TimeNs t_ns) {

@@ -49,7 +49,7 @@ void AppendPart(const Recording& part, TimeNs shift_ns, Recording* out) {
 
 }  // namespace
 
-Recording JoinRuns(std::vector<Recording> parts) {
+StatusOr<Recording> JoinRuns(std::vector<Recording> parts) {
   if (parts.size() == 1) return std::move(parts.front());
   Recording out;
   if (parts.empty()) return out;
@@ -59,7 +59,7 @@ Recording JoinRuns(std::vector<Recording> parts) {
   for (size_t k = 0; k < parts.size(); ++k) {
     const Recording& part = parts[k];
     if (part.controls.num_channels() != out.controls.num_channels()) {
-      throw RecordingError(part.source + ": " + std::to_string(part.controls.num_channels()) +
+      return Status::Error(part.source + ": " + std::to_string(part.controls.num_channels()) +
                            " control channels, the first recording has " +
                            std::to_string(out.controls.num_channels()));
     }

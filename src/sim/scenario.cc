@@ -9,25 +9,31 @@
 namespace kincal {
 
 namespace {
+
+// What reading a scenario throws on bad input; caught in LoadScenario, which returns it as a
+// Status.
+class ScenarioError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 template <typename T>
 T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std::string& file) {
   if (!n[key]) return fallback;
   try {
     return n[key].as<T>();
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key +
-                             "': " + e.msg);
+    throw ScenarioError(file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key +
+                        "': " + e.msg);
   }
 }
 
-}  // namespace
-
-Scenario LoadScenario(const std::string& file) {
+Scenario LoadScenarioOrThrow(const std::string& file) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(file);
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(file + ": " + e.what());
+    throw ScenarioError(file + ": " + e.what());
   }
   static const std::set<std::string> kKeys = {"model",          "truth",
                                               "hidden_effects", "estimator_effects",
@@ -39,8 +45,8 @@ Scenario LoadScenario(const std::string& file) {
   for (const auto& kv : root) {
     const auto key = kv.first.as<std::string>();
     if (!kKeys.count(key)) {
-      throw std::runtime_error(file + ":" + std::to_string(kv.first.Mark().line + 1) +
-                               ": unknown key '" + key + "'");
+      throw ScenarioError(file + ":" + std::to_string(kv.first.Mark().line + 1) +
+                          ": unknown key '" + key + "'");
     }
   }
   Scenario s;
@@ -69,30 +75,41 @@ Scenario LoadScenario(const std::string& file) {
     s.camera.dropout_prob = Get(c, "dropout_prob", s.camera.dropout_prob, file);
     const auto sigma = Get(c, "pose_sigma", std::vector<double>{}, file);
     if (!sigma.empty()) {
-      if (sigma.size() != 3) throw std::runtime_error(file + ": camera.pose_sigma needs 3 values");
+      if (sigma.size() != 3) throw ScenarioError(file + ": camera.pose_sigma needs 3 values");
       s.pose_sigma = Eigen::Vector3d(sigma[0], sigma[1], sigma[2]);
     }
   }
   std::string error;
-  if (!s.camera.IsValid(&error)) throw std::runtime_error(file + ": camera: " + error);
+  if (!s.camera.IsValid(&error)) throw ScenarioError(file + ": camera: " + error);
   if (!(s.duration_s > 0.0) || !(s.report_every_s > 0.0) || !(s.guess_sigma_fraction > 0.0)) {
-    throw std::runtime_error(file +
-                             ": duration_s, report_every_s, guess_sigma_fraction must be > 0");
+    throw ScenarioError(file + ": duration_s, report_every_s, guess_sigma_fraction must be > 0");
   }
   if (!(s.pose_sigma.array() > 0.0).all()) {
-    throw std::runtime_error(file + ": camera.pose_sigma must be > 0");
+    throw ScenarioError(file + ": camera.pose_sigma must be > 0");
   }
   return s;
 }
 
-VecN<kMaxState> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
-                           const std::string& what) {
+}  // namespace
+
+StatusOr<Scenario> LoadScenario(const std::string& file) {
+  try {
+    return LoadScenarioOrThrow(file);
+  } catch (const ScenarioError& e) {
+    return Status::Error(e.what());
+  } catch (const YAML::Exception& e) {
+    return Status::Error(file + ": " + e.what());
+  }
+}
+
+StatusOr<VecN<kMaxState>> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
+                                     const std::string& what) {
   VecN<kMaxState> p(sys.num_params());
   for (int i = 0; i < sys.num_params(); ++i)
     p[i] = sys.params()[static_cast<size_t>(i)].default_value;
   for (const auto& [name, v] : values) {
     const int i = sys.ParamIndex(name);
-    if (i < 0) throw std::runtime_error(what + ": unknown parameter '" + name + "'");
+    if (i < 0) return Status::Error(what + ": unknown parameter '" + name + "'");
     p[i] = v;
   }
   return p;

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "kincal/estimation/ceres_logging.h"
+#include "kincal/text.h"
 
 namespace kincal::vision {
 namespace {
@@ -163,6 +164,7 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
   bool header = false;
   while (std::getline(in, line)) {
     ++n;
+    CleanLine(&line, n == 1);  // CRLF, a byte-order mark
     if (line.empty() || line[0] == '#') continue;
     std::vector<std::string> cols;
     std::stringstream ss(line);
@@ -171,7 +173,8 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
     const std::string where = path + ":" + std::to_string(n);
     if (!header) {
       if (cols.size() != 6 || cols[0] != "view" || cols[1] != "X" || cols[5].substr(0, 1) != "v") {
-        throw std::runtime_error(where + ": expected header 'view,X,Y,Z,u,v'");
+        throw std::runtime_error(where + ": expected header 'view,X,Y,Z,u,v', got '" +
+                                 Escaped(line) + "'");
       }
       header = true;
       continue;
@@ -184,7 +187,7 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
       const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[k]);
       if (ec != std::errc() || end != tok.data() + tok.size() || !std::isfinite(v[k])) {
         throw std::runtime_error(where + ": column " + std::to_string(k + 2) +
-                                 ": expected a number, got '" + tok + "'");
+                                 ": expected a number, got '" + Escaped(tok) + "'");
       }
     }
     if (!views.count(cols[0])) {

@@ -12,6 +12,8 @@
 #include <vector>
 
 #include "kincal/io/output_file.h"
+#include "kincal/text.h"
+#include "vision/opencv_file.h"
 
 namespace kincal::vision {
 
@@ -120,6 +122,7 @@ bool IsRosCameraInfo(const std::string& path) {
   std::ifstream in(path);
   std::string first;
   if (!std::getline(in, first)) return false;
+  CleanLine(&first, true);
   return first.rfind("%YAML", 0) != 0 && first.rfind("<?xml", 0) != 0 && first.rfind("{", 0) != 0;
 }
 
@@ -128,12 +131,8 @@ bool IsRosCameraInfo(const std::string& path) {
 CameraModel ReadCameraYaml(const std::string& path) {
   if (IsRosCameraInfo(path)) return ReadRosCameraInfo(path);
   cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": not a readable OpenCV FileStorage file (" + e.what() + ")");
-  }
-  if (!fs.isOpened()) throw std::runtime_error(path + ": cannot open");
+  if (const Status s = OpenOpenCvFile(path, "camera intrinsics", &fs); !s.ok())
+    throw std::runtime_error(s.message());
   auto need = [&](const char* key) {
     cv::FileNode n = fs[key];
     if (n.empty()) throw std::runtime_error(path + ": missing key '" + key + "'");

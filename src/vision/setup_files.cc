@@ -6,6 +6,8 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include "vision/opencv_file.h"
+
 namespace kincal::vision {
 
 // Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
@@ -47,12 +49,8 @@ TargetLayout ReadTargetLayoutYaml(const std::string& path) {
 
 FloorExtrinsics ReadFloorYaml(const std::string& path) {
   cv::FileStorage fs;
-  try {
-    fs.open(path, cv::FileStorage::READ);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": not a readable OpenCV FileStorage file (" + e.what() + ")");
-  }
-  if (!fs.isOpened()) throw std::runtime_error(path + ": cannot open floor extrinsics");
+  if (const Status s = OpenOpenCvFile(path, "floor extrinsics", &fs); !s.ok())
+    throw std::runtime_error(s.message());
   cv::Mat R, t;
   fs["R_cf"] >> R;
   fs["t_cf"] >> t;

@@ -34,7 +34,7 @@ inline Recording UnicycleRecording(double duration_s, const std::vector<std::str
   const System sys = MakeSystem("unicycle", hidden);
   std::map<std::string, double> values = {{"k_v", 0.9}, {"k_omega", 0.8}};
   values.insert(truth.begin(), truth.end());
-  const VecN<kMaxState> p = ParamsFrom(sys, values, "truth");
+  const VecN<kMaxState> p = ParamsFrom(sys, values, "truth").value();
   std::mt19937_64 rng(seed);
   ControlSignal u(2, 0);
   const std::array<double, 2> lo = {-0.2, -1.0}, hi = {0.8, 1.0};

@@ -84,7 +84,7 @@ TEST_P(Undeclared, FindsNamesAndRecoversTheHiddenEffect) {
   AnalyzeOptions o = FastOptions(sc.model);
   // A car's steering gain and wheelbase trade off: the wheelbase is held, as from a drawing.
   if (sc.model == "bicycle") o.fixed = {{"wheelbase", sc.truth[3]}};
-  const AnalyzeResult r = Analyze(rec, o);
+  const AnalyzeResult r = Analyze(rec, o).value();
   // KINCAL_DEBUG_DIR=DIR keeps the report of a failing case for inspection.
   if (const char* dir = getenv("KINCAL_DEBUG_DIR")) {
     EXPECT_TRUE(WriteAnalysisReport(r, dir).ok());
@@ -176,11 +176,11 @@ TEST(Speed, ScreeningAndThreadsChangeNothing) {
   AnalyzeOptions full = FastOptions("unicycle");
   full.screen_stride = 1;
   full.confirm_candidates = 0;
-  const AnalyzeResult ref = Analyze(rec, full);
-  const AnalyzeResult one = Analyze(rec, FastOptions("unicycle"));
+  const AnalyzeResult ref = Analyze(rec, full).value();
+  const AnalyzeResult one = Analyze(rec, FastOptions("unicycle")).value();
   AnalyzeOptions two_threads = FastOptions("unicycle");
   two_threads.num_threads = 2;
-  const AnalyzeResult two = Analyze(rec, two_threads);
+  const AnalyzeResult two = Analyze(rec, two_threads).value();
   ASSERT_EQ(one.after.effects, ref.after.effects);
   ASSERT_EQ(two.after.effects, one.after.effects);
   ASSERT_EQ(one.after.params.size(), ref.after.params.size());
@@ -203,7 +203,7 @@ TEST(Clean, NoEffectIsInventedOnCleanData) {
   for (uint64_t seed = 1; seed <= 20; ++seed) {
     const Case c{static_cast<int>(seed % 4), {}, seed};
     const auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
-    const AnalyzeResult r = Analyze(SimulateRecording(c, 80.0), FastOptions(sc.model));
+    const AnalyzeResult r = Analyze(SimulateRecording(c, 80.0), FastOptions(sc.model)).value();
     if (!r.after.effects.empty()) {
       ++false_accepts;
       detail += sc.model + " seed " + std::to_string(seed) + ": " + r.after.effects.front() + "; ";
@@ -216,7 +216,7 @@ TEST(Clean, NoEffectIsInventedOnCleanData) {
 TEST(Report, TheFinalEstimateReadsBack) {
   const Case c{0, {}, 3};
   const auto sc = AllModelScenarios()[0];
-  const AnalyzeResult r = Analyze(SimulateRecording(c, 40.0), FastOptions(sc.model));
+  const AnalyzeResult r = Analyze(SimulateRecording(c, 40.0), FastOptions(sc.model)).value();
   const std::string dir = ::testing::TempDir() + "kincal_report_readback";
   ASSERT_TRUE(WriteAnalysisReport(r, dir).ok());
   ReportEstimate e;
@@ -259,7 +259,7 @@ TEST(Baseline, GuessesOffByFiveStillReachTheGlobalOptimum) {
                              ? 0.0
                              : sc.truth[static_cast<size_t>(i)] * factor;
       }
-      const AnalyzeResult r = Analyze(rec, o);
+      const AnalyzeResult r = Analyze(rec, o).value();
       for (int i = 0; i < sys.num_params(); ++i) {
         const auto& p = r.before.params[static_cast<size_t>(i)];
         EXPECT_LE(std::abs(p.value - sc.truth[static_cast<size_t>(i)]), 3.0 * p.sigma)
@@ -279,7 +279,7 @@ namespace {
 TEST(Timing, ClockOffsetOfSecondsIsFound) {
   // The robot's clock runs 1.7 s behind the camera's: far outside the basin of a local fit.
   const Case c{1, {{"time_offset", {{"delay_s", 1.7}}}}, 4};
-  const AnalyzeResult r = Analyze(SimulateRecording(c, 120.0), FastOptions("unicycle"));
+  const AnalyzeResult r = Analyze(SimulateRecording(c, 120.0), FastOptions("unicycle")).value();
   ASSERT_FALSE(r.after.effects.empty());
   EXPECT_EQ(r.after.effects.front(), "time_offset");
   for (const auto& p : r.after.params) {
@@ -302,13 +302,13 @@ TEST(Rates, DefaultsWorkFromTwoHertzToOneKilohertz) {
     AnalyzeOptions o;
     o.model = "unicycle";
     o.effects_mode = "none";
-    AnalyzeResult res;
-    try {
-      res = Analyze(rec, o);
-    } catch (const AnalysisError& e) {
-      ADD_FAILURE() << r.pose_hz << " Hz poses, " << r.control_hz << " Hz controls: " << e.what();
+    const StatusOr<AnalyzeResult> result = Analyze(rec, o);
+    if (!result.ok()) {
+      ADD_FAILURE() << r.pose_hz << " Hz poses, " << r.control_hz
+                    << " Hz controls: " << result.status().message();
       continue;
     }
+    const AnalyzeResult& res = result.value();
     EXPECT_TRUE(res.goodness.judged && res.goodness.explains) << res.goodness.verdict;
     const double truth[2] = {0.9, 0.8};
     for (size_t i = 0; i < 2; ++i) {
@@ -336,7 +336,7 @@ TEST(GoodnessOfFit, RandomNumbersAreSaidToBeExplainedByNothing) {
   AnalyzeOptions o;
   o.model = "unicycle";
   o.effects_mode = "none";
-  const AnalyzeResult r = Analyze(rec, o);
+  const AnalyzeResult r = Analyze(rec, o).value();
   EXPECT_TRUE(r.goodness.judged) << r.goodness.verdict;
   EXPECT_FALSE(r.goodness.explains) << r.goodness.verdict;
   EXPECT_FALSE(r.after.unique);
@@ -359,14 +359,11 @@ TEST(Identifiability, UnobservableParameterIsNamedWithTheMotionThatExcitesIt) {
   o.model = "unicycle";
   o.effects_mode = "none";
   o.pose_sigma = Eigen::Vector2d(0.001, 0.001);
-  try {
-    Analyze(rec, o);
-    FAIL() << "expected an unobservability error";
-  } catch (const AnalysisError& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("parameter 'k_omega' is not identifiable"), std::string::npos) << m;
-    EXPECT_NE(m.find("excite it with turning"), std::string::npos) << m;
-  }
+  const StatusOr<AnalyzeResult> result = Analyze(rec, o);
+  ASSERT_FALSE(result.ok()) << "expected an unobservability error";
+  const std::string m = result.status().message();
+  EXPECT_NE(m.find("parameter 'k_omega' is not identifiable"), std::string::npos) << m;
+  EXPECT_NE(m.find("excite it with turning"), std::string::npos) << m;
 }
 
 // Issue 33: a car's steering gain trades off against its wheelbase. Without a known
@@ -381,18 +378,17 @@ TEST(Fixed, AHeldWheelbaseSeparatesTheSteeringGain) {
   // Steering angles up to 0.3 rad: tan() barely bends, the two are weakly determined. The
   // analysis fails naming them (when not identifiable) or reports it (when weakly).
   std::string said;
-  try {
-    const AnalyzeResult free = Analyze(rec, o);
-    for (const auto& w : free.after.weak) said += w + "\n";
-  } catch (const AnalysisError& e) {
-    said = e.what();
+  if (const StatusOr<AnalyzeResult> free = Analyze(rec, o); free.ok()) {
+    for (const auto& w : free.value().after.weak) said += w + "\n";
+  } else {
+    said = free.status().message();
   }
   EXPECT_NE(said.find("trades off against"), std::string::npos) << said;
   EXPECT_NE(said.find("k_steer"), std::string::npos) << said;
   EXPECT_NE(said.find("wheelbase"), std::string::npos) << said;
   EXPECT_NE(said.find("--fix "), std::string::npos) << said;
   o.fixed = {{"wheelbase", 0.33}};
-  const AnalyzeResult r = Analyze(rec, o);
+  const AnalyzeResult r = Analyze(rec, o).value();
   ASSERT_EQ(r.after.fixed, std::vector<std::string>{"wheelbase=0.33"});
   std::map<std::string, ParamEstimate> got;
   for (const auto& p : r.after.params) got[p.name] = p;
@@ -413,17 +409,18 @@ TEST(Fixed, UnknownNamesAndFixingEverythingAreErrorsNamingTheParameters) {
   const Recording rec = SimulateRecording(Case{4, {}, 5}, 30.0);
   AnalyzeOptions o = FastOptions("bicycle");
   o.fixed = {{"wheel_base", 0.33}};
-  try {
-    Analyze(rec, o);
-    FAIL() << "expected an unknown-name error";
-  } catch (const AnalysisError& e) {
-    EXPECT_NE(std::string(e.what()).find("no parameter 'wheel_base' (its parameters: k_v, "
-                                         "k_steer, steer_offset, wheelbase)"),
-              std::string::npos)
-        << e.what();
-  }
+  const StatusOr<AnalyzeResult> unknown = Analyze(rec, o);
+  ASSERT_FALSE(unknown.ok()) << "expected an unknown-name error";
+  EXPECT_NE(unknown.status().message().find("no parameter 'wheel_base' (its parameters: k_v, "
+                                            "k_steer, steer_offset, wheelbase)"),
+            std::string::npos)
+      << unknown.status().message();
   o.fixed = {{"k_v", 1}, {"k_steer", 1}, {"steer_offset", 0}, {"wheelbase", 0.33}};
-  EXPECT_THROW(Analyze(rec, o), AnalysisError);
+  const StatusOr<AnalyzeResult> all = Analyze(rec, o);
+  ASSERT_FALSE(all.ok());
+  EXPECT_NE(all.status().message().find("every parameter of model 'bicycle' is fixed"),
+            std::string::npos)
+      << all.status().message();
   o.fixed = {{"wheelbase", std::nan("")}};
   std::string error;
   EXPECT_FALSE(o.IsValid(&error));

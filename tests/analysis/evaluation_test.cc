@@ -20,7 +20,7 @@ Judged Judge(double k_v) {
   o.model = "unicycle";
   o.pose_sigma = Eigen::Vector2d(0.001, 0.003);
   std::vector<std::string> warnings;
-  const Dataset d = Prepare(rec, o, &warnings);
+  const Dataset d = Prepare(rec, o, &warnings).value();
   const System sys = MakeSystem("unicycle");
   Eigen::VectorXd p(2);
   p << k_v, 0.8;

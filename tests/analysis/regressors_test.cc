@@ -13,7 +13,7 @@ Dataset Prepared(const Recording& rec) {
   AnalyzeOptions o;
   o.model = "unicycle";
   std::vector<std::string> warnings;
-  return Prepare(rec, o, &warnings);
+  return Prepare(rec, o, &warnings).value();
 }
 
 TEST(Regressors, ConstantCommandGivesItsTwist) {

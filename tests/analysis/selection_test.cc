@@ -57,12 +57,12 @@ TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
   AnalyzeOptions o;
   o.model = "unicycle";
   std::vector<std::string> warnings;
-  Dataset d = Prepare(rec, o, &warnings);
+  Dataset d = Prepare(rec, o, &warnings).value();
   const auto model = std::shared_ptr<const KinematicModel>(MakeModel("unicycle"));
   const System bare(model, {});
   FitReport report;
   SelectionState current;
-  current.fit = FitBaseline(bare, d, InitialParams(bare, {}), o, &report);
+  current.fit = FitBaseline(bare, d, InitialParams(bare, {}).value(), o, &report).value();
   ComputeFeatures(&d, bare, current.fit.p);
   current.eval = Evaluate(bare, current.fit.p, d);
   const double lag = EstimateCommandLag(d, bare, current.fit.p);

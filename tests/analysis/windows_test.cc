@@ -41,7 +41,7 @@ AnalyzeOptions Options() {
 TEST(Windows, CutsFitAndHeldOutWindowsOfOneHorizon) {
   const Recording rec = Circle(0.002, 0.004);
   std::vector<std::string> warnings;
-  const Dataset d = Prepare(rec, Options(), &warnings);
+  const Dataset d = Prepare(rec, Options(), &warnings).value();
   EXPECT_TRUE(warnings.empty());
   EXPECT_NEAR(d.t_split, 0.7 * 99.9, 0.1);
   // Fit windows: non-overlapping 1 s windows over the first 70 s.
@@ -65,7 +65,7 @@ TEST(Windows, EstimatesThePoseNoiseFromSecondDifferences) {
   const Dataset d = [] {
     static const Recording rec = Circle(0.002, 0.004);
     std::vector<std::string> w;
-    return Prepare(rec, Options(), &w);
+    return Prepare(rec, Options(), &w).value();
   }();
   EXPECT_NEAR(d.sigma[0], 0.002, 0.0002);
   EXPECT_NEAR(d.sigma[1], 0.004, 0.0004);
@@ -74,7 +74,7 @@ TEST(Windows, EstimatesThePoseNoiseFromSecondDifferences) {
 TEST(Windows, NoWindowSpansAGap) {
   static const Recording rec = Circle(0.002, 0.004, 30.0);
   std::vector<std::string> warnings;
-  const Dataset d = Prepare(rec, Options(), &warnings);
+  const Dataset d = Prepare(rec, Options(), &warnings).value();
   for (const Window& w : d.eval) {
     const double t0 = d.t[static_cast<size_t>(w.start)], t1 = d.t[static_cast<size_t>(w.end)];
     EXPECT_LT(t1 - t0, 1.11) << "a window from " << t0 << " s spans the 5 s gap";
@@ -93,7 +93,7 @@ TEST(Windows, NoWindowSpansAShortGapInside) {
   }
   rec.poses = kept;
   std::vector<std::string> warnings;
-  const Dataset d = Prepare(rec, Options(), &warnings);
+  const Dataset d = Prepare(rec, Options(), &warnings).value();
   for (const Window& w : d.eval) {
     const double t0 = d.t[static_cast<size_t>(w.start)], t1 = d.t[static_cast<size_t>(w.end)];
     EXPECT_FALSE(t0 <= 30.05 && t1 >= 30.95) << "a window from " << t0 << " s spans the carry";
@@ -109,13 +109,10 @@ TEST(Windows, ATooShortRecordingIsAnErrorNamingIt) {
   Recording rec = Circle(0.002, 0.004);
   rec.poses.resize(15);
   std::vector<std::string> warnings;
-  try {
-    Prepare(rec, Options(), &warnings);
-    FAIL() << "expected an AnalysisError";
-  } catch (const AnalysisError& e) {
-    EXPECT_NE(std::string(e.what()).find("synthetic: only 15 poses"), std::string::npos)
-        << e.what();
-  }
+  const StatusOr<Dataset> d = Prepare(rec, Options(), &warnings);
+  ASSERT_FALSE(d.ok()) << "expected an error";
+  EXPECT_NE(d.status().message().find("synthetic: only 15 poses"), std::string::npos)
+      << d.status().message();
 }
 
 }  // namespace

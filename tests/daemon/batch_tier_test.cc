@@ -77,7 +77,7 @@ TEST(BatchTier, StartsOnScheduleAndAppliesAtFixedDataTimes) {
   AnalyzeOptions o;
   o.model = "unicycle";
   o.init = {{"k_v", 1.0}, {"k_omega", 1.0}};
-  const AnalyzeResult offline = Analyze(fed.rec, o);
+  const AnalyzeResult offline = Analyze(fed.rec, o).value();
   ASSERT_TRUE(last[0].ok) << last[0].error;
   ASSERT_EQ(last[0].params.size(), offline.after.params.size());
   for (size_t i = 0; i < offline.after.params.size(); ++i) {

@@ -38,7 +38,7 @@ TEST(BatchWorker, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
   EXPECT_NE(r.accepted_evidence[0].find("held-out gain"), std::string::npos);
   EXPECT_EQ(r.num_poses, static_cast<int>(rec.poses.size()));
   EXPECT_GT(r.compute_s, 0.0);
-  const AnalyzeResult offline = Analyze(rec, AutoOptions());
+  const AnalyzeResult offline = Analyze(rec, AutoOptions()).value();
   ASSERT_EQ(r.params.size(), offline.after.params.size());
   ASSERT_EQ(r.covariance.rows(), static_cast<int>(r.params.size()));
   for (size_t i = 0; i < r.params.size(); ++i) {

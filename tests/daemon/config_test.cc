@@ -80,6 +80,22 @@ record: {frame_encoding: png}
   EXPECT_EQ(ControlStampName(c.robot.control_stamp), "sender");
 }
 
+// Issue 34: a config saved by a Windows editor (CRLF, a UTF-8 byte-order mark) reads as its
+// LF twin.
+TEST(Config, CrlfAndByteOrderMarkReadAsPlainText) {
+  const std::string text =
+      "source: replay\nreplay: {path: run.lcm}\npose:\n  method: lowe\n"
+      "robot:\n  model: diffdrive\n  fixed: {d: 0.3}\n";
+  std::string windows = "\xEF\xBB\xBF";
+  for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+  const DaemonConfig c = LoadDaemonConfig(WriteConfig("crlf.yaml", windows));
+  EXPECT_EQ(c.source, SourceKind::kReplay);
+  EXPECT_TRUE(c.replay.path.ends_with("/run.lcm")) << c.replay.path;
+  EXPECT_EQ(c.pose.method, PoseMethod::kLowe);
+  EXPECT_EQ(c.robot.model, "diffdrive");
+  EXPECT_EQ(c.robot.fixed.at("d"), 0.3);
+}
+
 TEST(Config, AWrongChoiceNamesFileLineKeyAndTheChoices) {
   const std::string path = WriteConfig("bad_choice.yaml", "source: sim\npose:\n  method: pnp\n");
   EXPECT_EQ(LoadError(path),

@@ -33,7 +33,7 @@ inline DaemonConfig SimConfig(double duration_s) {
 }
 
 inline std::map<std::string, double> Truth(const DaemonConfig& c) {
-  return LoadScenario(c.sim.scenario).truth;
+  return LoadScenario(c.sim.scenario).value().truth;
 }
 
 // Normalised parameter error against the truth.

@@ -79,7 +79,7 @@ inline Samples Simulate(const StageScenario& sc) {
     if (m.model == sc.model) range = m;
   }
   std::mt19937_64 rng(sc.seed);
-  const auto params = ParamsFrom(truth, sc.truth, "truth");
+  const auto params = ParamsFrom(truth, sc.truth, "truth").value();
   const testing::SimData d = testing::Simulate(truth, params, range.lo, range.hi, sc.duration_s,
                                                sc.camera_hz, sc.pose_sigma, rng);
   Samples out;

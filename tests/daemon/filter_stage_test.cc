@@ -248,7 +248,8 @@ TEST(FilterStageOnlineOffline, DeclaredEffectsAgreeWithAnalyze) {
   o.model = sc.model;
   o.base_effects = sc.declared;
   o.effects_mode = "none";
-  const AnalyzeResult offline = Analyze(test_util::ToRecording(test_util::Simulate(sc), 2), o);
+  const AnalyzeResult offline =
+      Analyze(test_util::ToRecording(test_util::Simulate(sc), 2), o).value();
   for (const auto& e : offline.after.params) {
     const double online = run.Final(e.name), sigma = run.FinalSigma(e.name);
     EXPECT_NEAR(online, e.value, std::max(0.05 * std::abs(e.value), 3 * sigma))
@@ -267,7 +268,7 @@ AnalyzeResult Offline(const StageScenario& sc, const std::string& effects_mode) 
   o.effects_mode = effects_mode;
   o.init = sc.guess;
   const int nc = MakeSystem(sc.model).num_controls();
-  return Analyze(test_util::ToRecording(test_util::Simulate(sc), nc), o);
+  return Analyze(test_util::ToRecording(test_util::Simulate(sc), nc), o).value();
 }
 
 // The calibration a run ends with equals analyze's within 1 sigma, parameter by parameter,

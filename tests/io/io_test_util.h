@@ -45,12 +45,9 @@ class IoTest : public ::testing::Test {
     return p;
   }
   std::string Error(const std::string& controls, const std::string& poses) {
-    try {
-      ReadCsvRecording(Write("c.csv", controls), Write("p.csv", poses), *MakeModel("unicycle"));
-    } catch (const RecordingError& e) {
-      return e.what();
-    }
-    return "no error";
+    const StatusOr<Recording> r =
+        ReadCsvRecording(Write("c.csv", controls), Write("p.csv", poses), *MakeModel("unicycle"));
+    return r.ok() ? std::string("no error") : r.status().message();
   }
   std::filesystem::path dir_;
 };

@@ -26,6 +26,46 @@ TEST_F(RecordingCsv, NonNumericValueNamesLineAndColumn) {
       << e;
 }
 
+// Issue 34: files from Windows tools (CRLF) and spreadsheets (a UTF-8 byte-order mark) read
+// as their LF twins; what is invisible in a bad token is shown escaped.
+TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
+  const auto model = MakeModel("unicycle");
+  const std::string c = "t,v,omega\n0,1,0\n1,1,0.5\n2,1,0\n";
+  const std::string p = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0.1,0.2\n";
+  auto windows = [](const std::string& text) {
+    std::string out = "\xEF\xBB\xBF";
+    for (char ch : text) out += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+    return out;
+  };
+  const Recording plain = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model).value();
+  const StatusOr<Recording> win =
+      ReadCsvRecording(Write("cw.csv", windows(c)), Write("pw.csv", windows(p)), *model);
+  ASSERT_TRUE(win.ok()) << win.status().message();
+  ASSERT_EQ(win->poses.size(), plain.poses.size());
+  for (size_t k = 0; k < plain.poses.size(); ++k) {
+    EXPECT_EQ(win->poses[k].t_ns, plain.poses[k].t_ns);
+    EXPECT_EQ(win->poses[k].z, plain.poses[k].z);
+  }
+  ASSERT_EQ(win->controls.size(), plain.controls.size());
+  EXPECT_EQ(win->controls.ValuesAt(1)[1], 0.5);
+  // An invisible character in a value (a spreadsheet's no-break space) is named, escaped.
+  const std::string e = Error("t,v,omega\n0,1\xC2\xA0,0\n1,1,0\n", kPoses);
+  EXPECT_NE(e.find("c.csv:2: column 'v': expected a finite number, got '1\\xC2\\xA0'"),
+            std::string::npos)
+      << e;
+}
+
+TEST_F(RecordingCsv, MrclamFilesWithCrlfAndByteOrderMark) {
+  const std::string d = dir_.string();
+  Write("Robot1_Odometry.dat", "\xEF\xBB\xBF# Time [sec]\r\n10.0 0.1 0\r\n10.1 0.1 0.2\r\n");
+  Write("Robot1_Groundtruth.dat", "# comment\r\n10.0 1 2 0.5\r\n10.2 1.01 2 0.5\r\n");
+  const StatusOr<Recording> r = ReadMrclam(d, 1);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->stats.comment_lines, 2);
+  EXPECT_EQ(r->controls.size(), 2u);
+  EXPECT_EQ(r->poses.size(), 2u);
+}
+
 TEST_F(RecordingCsv, TimeGoingBackwardsIsAnError) {
   const std::string e = Error("t,v,omega\n0,1,0\n2,1,0\n1,1,0\n", kPoses);
   EXPECT_NE(e.find("c.csv:4: time 1 goes backwards (previous row, line 3, has 2)"),
@@ -65,26 +105,21 @@ TEST_F(RecordingCsv, EmptyFileAndWrongRowLength) {
 // Reproduces issue 16 (items 9 and 13): a directory given as a CSV said "empty file", and
 // --poses /dev/zero read one endless line (3.9 GB in 10 s).
 TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
-  std::string e;
-  try {
-    ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle"));
-  } catch (const RecordingError& err) {
-    e = err.what();
-  }
+  std::string e = ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle"))
+                      .status()
+                      .message();
   EXPECT_NE(e.find("is a directory, expected a text file"), std::string::npos) << e;
-  e.clear();
-  try {
-    ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero", *MakeModel("unicycle"));
-  } catch (const RecordingError& err) {
-    e = err.what();
-  }
+  e = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero", *MakeModel("unicycle"))
+          .status()
+          .message();
   EXPECT_NE(e.find("/dev/zero:1: line longer than 65536 bytes"), std::string::npos) << e;
 }
 
 TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
                                        Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),
-                                       *MakeModel("unicycle"));
+                                       *MakeModel("unicycle"))
+                          .value();
   EXPECT_EQ(r.stats.control_repeated_times, 1);
   EXPECT_EQ(r.stats.pose_repeated_times, 1);
   EXPECT_EQ(r.controls.At(0.5)[0], 2.0);  // v, the later of the repeated rows
@@ -94,9 +129,10 @@ TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
 }
 
 TEST_F(RecordingCsv, HeadingInDegreesIsFlagged) {
-  const Recording r = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
-                                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"),
-                                       *MakeModel("unicycle"));
+  const Recording r =
+      ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
+                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"), *MakeModel("unicycle"))
+          .value();
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos)
       << r.warnings[0];
@@ -106,17 +142,14 @@ TEST_F(RecordingCsv, MrclamCommentsAndMissingFile) {
   const std::string d = dir_.string();
   Write("Robot1_Odometry.dat", "# comment\n10.0 0.1 0.0\n10.5 0.1 0.2\n");
   Write("Robot1_Groundtruth.dat", "# comment\n10.0 1 2 0.5\n10.2 1.01 2 0.5\n");
-  const Recording r = ReadMrclam(d, 1);
+  const Recording r = ReadMrclam(d, 1).value();
   EXPECT_EQ(r.stats.comment_lines, 2);
   EXPECT_EQ(r.origin_s, 10.0);
   EXPECT_EQ(r.controls.size(), 2u);
-  try {
-    ReadMrclam(d, 2);
-    FAIL();
-  } catch (const RecordingError& e) {
-    EXPECT_NE(std::string(e.what()).find("Robot2_Odometry.dat: cannot open"), std::string::npos)
-        << e.what();
-  }
+  const StatusOr<Recording> missing = ReadMrclam(d, 2);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("Robot2_Odometry.dat: cannot open"), std::string::npos)
+      << missing.status().message();
 }
 
 }  // namespace

@@ -45,7 +45,8 @@ TEST(PlanOutput, CsvReadsBackAndJsonHasEveryMotion) {
 
   std::ofstream(dir / "poses.csv") << "t,x,y,theta\n0,0,0,0\n";
   const Recording r =
-      ReadCsvRecording((dir / "plan.csv").string(), (dir / "poses.csv").string(), sys.model());
+      ReadCsvRecording((dir / "plan.csv").string(), (dir / "poses.csv").string(), sys.model())
+          .value();
   ASSERT_EQ(r.controls.size(), plan.controls.size());
   for (size_t i = 0; i < plan.controls.size(); i += 7) {
     const int k = static_cast<int>(i);

@@ -16,16 +16,12 @@ namespace {
 std::string Source(const std::string& rel) { return ::kincal::testing::SourceDir() + "/" + rel; }
 
 std::string LoadError(const std::string& path) {
-  try {
-    LoadScenario(path);
-  } catch (const std::runtime_error& e) {
-    return e.what();
-  }
-  return "no error";
+  const StatusOr<Scenario> s = LoadScenario(path);
+  return s.ok() ? std::string("no error") : s.status().message();
 }
 
 TEST(Scenario, ShippedExampleLoads) {
-  const Scenario s = LoadScenario(Source("config/sim_diffdrive.yaml"));
+  const Scenario s = LoadScenario(Source("config/sim_diffdrive.yaml")).value();
   EXPECT_EQ(s.model, "diffdrive");
   EXPECT_GT(s.duration_s, 0.0);
   EXPECT_GT(s.camera.rate_hz, 0.0);
@@ -47,10 +43,10 @@ TEST(Scenario, NegativeDurationIsRejected) {
 
 TEST(Scenario, ParamsByNameOverTheModelsDefaults) {
   const System sys = MakeSystem("diffdrive");
-  const VecN<kMaxState> p = ParamsFrom(sys, {{"d", 0.2}}, "truth");
+  const VecN<kMaxState> p = ParamsFrom(sys, {{"d", 0.2}}, "truth").value();
   EXPECT_EQ(p[2], 0.2);
   EXPECT_EQ(p[0], sys.params()[0].default_value);
-  EXPECT_THROW(ParamsFrom(sys, {{"wheel", 1.0}}, "truth"), std::runtime_error);
+  EXPECT_FALSE(ParamsFrom(sys, {{"wheel", 1.0}}, "truth").ok());
 }
 
 }  // namespace

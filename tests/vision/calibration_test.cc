@@ -72,6 +72,44 @@ TEST(Calibration, BadInputNamesTheProblem) {
   EXPECT_NE(message(few, opt).find("view 1: at least 6 point pairs"), std::string::npos);
 }
 
+// Issue 34: a points file saved by a Windows tool (CRLF, a UTF-8 byte-order mark) read the
+// previous release and failed with "got '237.257'" (the carriage return invisible).
+TEST(Calibration, PointsFileWithCrlfAndByteOrderMark) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string plain = (dir / "kincal_points_lf.csv").string();
+  const std::string windows = (dir / "kincal_points_crlf.csv").string();
+  const std::string rows =
+      "view,X,Y,Z,u,v\n0,0,0,0,100.5,237.257\n0,0.1,0,0,180,237.5\n"
+      "1,0,0,0,101,238\n";
+  std::ofstream(plain, std::ios::binary) << rows;
+  std::string crlf = "\xEF\xBB\xBF";
+  for (char ch : rows) crlf += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+  std::ofstream(windows, std::ios::binary) << crlf;
+  const auto a = ReadCalibrationPoints(plain);
+  const auto b = ReadCalibrationPoints(windows);
+  ASSERT_EQ(a.size(), 2u);
+  ASSERT_EQ(b.size(), a.size());
+  for (size_t k = 0; k < a.size(); ++k) {
+    EXPECT_EQ(b[k].name, a[k].name);
+    ASSERT_EQ(b[k].image.size(), a[k].image.size());
+    for (size_t i = 0; i < a[k].image.size(); ++i) {
+      EXPECT_EQ(b[k].image[i], a[k].image[i]);
+      EXPECT_EQ(b[k].object[i], a[k].object[i]);
+    }
+  }
+  EXPECT_EQ(a[0].image[0].y(), 237.257);
+  // A carriage return left inside a value is shown, escaped.
+  std::ofstream(windows, std::ios::binary) << "view,X,Y,Z,u,v\n0,0,0,0,100\r,237\n";
+  try {
+    ReadCalibrationPoints(windows);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(":2: column 5: expected a number, got '100\\r'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Calibration, ParallelBoardsAreDegenerate) {
   // Three fronto-parallel views (the board only translated): Zhang's system has no unique
   // solution; the error says how to fix the views.

@@ -63,6 +63,28 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   }
 }
 
+// Issue 34: both camera files as Windows tools save them (CRLF, a UTF-8 byte-order mark)
+// read as their LF twins.
+TEST(Camera, CrlfAndByteOrderMarkReadAsPlainText) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string opencv = (dir / "kincal_cam_crlf_cv.yaml").string();
+  const std::string ros = (dir / "kincal_cam_crlf_ros.yaml").string();
+  ASSERT_TRUE(WriteCameraYaml(TestCamera(), opencv).ok());
+  ASSERT_TRUE(WriteCameraInfoYaml(TestCamera(), "overhead", ros).ok());
+  for (const std::string& path : {opencv, ros}) {
+    std::ifstream in(path);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::string windows = "\xEF\xBB\xBF";
+    for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+    const std::string crlf = path + ".crlf.yaml";
+    std::ofstream(crlf, std::ios::binary) << windows;
+    const CameraModel c = ReadCameraYaml(crlf);
+    EXPECT_EQ(c.width, TestCamera().width) << crlf;
+    EXPECT_DOUBLE_EQ(c.fx, TestCamera().fx) << crlf;
+    EXPECT_DOUBLE_EQ(c.k3, TestCamera().k3) << crlf;
+  }
+}
+
 // ROS camera_info YAML (camera_calibration_parsers' keys), read back by the same reader.
 TEST(Camera, RosCameraInfoYamlRoundTrip) {
   const auto dir = std::filesystem::temp_directory_path();

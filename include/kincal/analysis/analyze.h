@@ -20,7 +20,6 @@
 #include <functional>
 #include <map>
 #include <optional>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -29,11 +28,6 @@
 #include "kincal/status.h"
 
 namespace kincal {
-
-class AnalysisError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 struct AnalyzeOptions {
   std::string model;
@@ -180,7 +174,9 @@ struct AnalyzeResult {
   DeadReckoning heldout_dr_before, heldout_dr_after;
 };
 
-AnalyzeResult Analyze(const Recording& rec, const AnalyzeOptions& options);
+// An error names the recording, option or parameter at fault (too short, unknown names,
+// a parameter the data cannot determine).
+StatusOr<AnalyzeResult> Analyze(const Recording& rec, const AnalyzeOptions& options);
 
 // Writes DIR/residuals.csv, DIR/report.html (which shows the PNGs that
 // scripts/plot_analysis.py draws from those files) and last DIR/report.json, each whole or

@@ -1,7 +1,7 @@
 // A recording: commanded controls and measured target poses on one time base.
 //
-// Readers for the formats kincal accepts. Every reader reports bad input as a
-// RecordingError naming the file, the line (or LCM event) and what was expected; nothing
+// Readers for the formats kincal accepts. Every reader returns bad input as an error Status
+// naming the file, the line (or LCM event) and what was expected; nothing
 // is silently dropped: repeated timestamps, reordered rows and skipped rows are counted in
 // RecordingStats and reported by the caller.
 //
@@ -10,19 +10,14 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "kincal/control_signal.h"
 #include "kincal/model.h"
+#include "kincal/status.h"
 
 namespace kincal {
-
-class RecordingError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // A measured pose in a recording (CSV, MR.CLAM, LCM log).
 // Longest line the text readers accept (a CSV row, an MR.CLAM line): memory is bounded
@@ -71,7 +66,7 @@ int RunOf(const Recording& rec, TimeNs t_ns);
 // epoch, or files out of order), and a warning says so. Runs are never joined: nothing
 // predicts across a run's start. The parts must have the same control channels.
 inline constexpr double kRunGapS = 1.0;
-Recording JoinRuns(std::vector<Recording> parts);
+StatusOr<Recording> JoinRuns(std::vector<Recording> parts);
 
 // Controls recorded as positions (wheel encoders: cumulative counts, or angles in rad) to
 // the rates the models take: over each interval between samples, the position difference
@@ -80,25 +75,25 @@ Recording JoinRuns(std::vector<Recording> parts);
 // (counts_per_rev 0: the positions are radians, and a joint reported in (-pi, pi] is
 // unwrapped). Never across a run's start. An error names the recording when a run has
 // fewer than two samples.
-void PositionsToRates(double counts_per_rev, Recording* rec);
+Status PositionsToRates(double counts_per_rev, Recording* rec);
 
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
 // error); P.csv: header "t,x,y,theta". Times in seconds, any epoch. An optional integer
 // `run` column in both files numbers the runs. `positions`: the controls are wheel
 // positions (encoder counts or angles, PositionsToRates), not checked against the
 // plausible range of the model's rates.
-Recording ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
-                           const KinematicModel& model, bool positions = false);
+StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
+                                     const KinematicModel& model, bool positions = false);
 
 // UTIAS MR.CLAM: DIR/RobotN_Odometry.dat (t v omega) and DIR/RobotN_Groundtruth.dat
 // (t x y theta); '#' starts a comment. Controls are the unicycle model's (v, omega).
-Recording ReadMrclam(const std::string& dir, int robot);
+StatusOr<Recording> ReadMrclam(const std::string& dir, int robot);
 
 // A kincald recording (LCM event log): kincal.controls_t on `controls_channel` and
 // kincal.pose_t on `pose_channel` (times from their utime fields); kincal.run_t on
 // KINCAL_RUN (written by `kincal import` of several bags) marks where each run starts.
-Recording ReadLcmLog(const std::string& path, const KinematicModel& model,
-                     const std::string& controls_channel = "KINCAL_CONTROLS",
-                     const std::string& pose_channel = "KINCAL_POSE");
+StatusOr<Recording> ReadLcmLog(const std::string& path, const KinematicModel& model,
+                               const std::string& controls_channel = "KINCAL_CONTROLS",
+                               const std::string& pose_channel = "KINCAL_POSE");
 
 }  // namespace kincal

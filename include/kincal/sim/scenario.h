@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "kincal/sim/simulator.h"
+#include "kincal/status.h"
 #include "kincal/system.h"
 
 namespace kincal {
@@ -34,12 +35,12 @@ struct Scenario {
   double report_every_s = 10.0;
 };
 
-// Throws std::runtime_error naming the file, line and key.
-Scenario LoadScenario(const std::string& file);
+// An error names the file, line and key.
+StatusOr<Scenario> LoadScenario(const std::string& file);
 
-// Parameter vector of `sys`: model defaults overridden by `values` (by name). Throws naming
+// Parameter vector of `sys`: model defaults overridden by `values` (by name). An error names
 // `what` and the unknown parameter.
-VecN<kMaxState> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
-                           const std::string& what);
+StatusOr<VecN<kMaxState>> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
+                                     const std::string& what);
 
 }  // namespace kincal

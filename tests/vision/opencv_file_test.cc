@@ -1,0 +1,54 @@
+// OpenOpenCvFile (src/vision/opencv_file.cc): what OpenCV writes, and the same saved with a
+// byte-order mark and CRLF, read alike; missing and garbage files named.
+#include "vision/opencv_file.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace kincal::vision {
+namespace {
+
+TEST(OpenCvFile, ByteOrderMarkAndCrlfAreTaken) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string plain = (dir / "kincal_ocv_lf.yaml").string();
+  {
+    cv::FileStorage out(plain, cv::FileStorage::WRITE);
+    out << "answer" << 42 << "m" << cv::Mat::eye(2, 2, CV_64F);
+  }
+  std::ifstream in(plain);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::string windows = "\xEF\xBB\xBF";
+  for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
+  const std::string crlf = (dir / "kincal_ocv_crlf.yaml").string();
+  std::ofstream(crlf, std::ios::binary) << windows;
+  for (const std::string& path : {plain, crlf}) {
+    cv::FileStorage fs;
+    const Status s = OpenOpenCvFile(path, "test", &fs);
+    ASSERT_TRUE(s.ok()) << s.message();
+    EXPECT_EQ(static_cast<int>(fs["answer"]), 42) << path;
+    cv::Mat m;
+    fs["m"] >> m;
+    EXPECT_EQ(m.at<double>(1, 1), 1.0) << path;
+  }
+}
+
+TEST(OpenCvFile, MissingAndGarbageFilesAreNamed) {
+  const auto dir = std::filesystem::temp_directory_path();
+  cv::FileStorage fs;
+  const std::string missing = (dir / "kincal_ocv_none.yaml").string();
+  std::filesystem::remove(missing);
+  const Status a = OpenOpenCvFile(missing, "camera", &fs);
+  EXPECT_NE(a.message().find("kincal_ocv_none.yaml: cannot open camera: No such file"),
+            std::string::npos)
+      << a.message();
+  const std::string garbage = (dir / "kincal_ocv_garbage.yaml").string();
+  std::ofstream(garbage) << "%YAML:1.0\n---\n: : [\n";
+  const Status b = OpenOpenCvFile(garbage, "camera", &fs);
+  EXPECT_FALSE(b.ok());
+  EXPECT_NE(b.message().find("kincal_ocv_garbage.yaml"), std::string::npos) << b.message();
+}
+
+}  // namespace
+}  // namespace kincal::vision
