@@ -73,7 +73,7 @@ const kincal::KinematicModel& Diffdrive() {
 
 void FuzzLcmLog(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("log.lcm", data, size);
-  Expect([&] { kincal::ReadLcmLog(path, Diffdrive()); });
+  Expect([&] { (void)kincal::ReadLcmLog(path, Diffdrive()); });
   kincal::daemon::DaemonConfig c;
   c.source = kincal::daemon::SourceKind::kReplay;
   c.replay.path = path;
@@ -124,20 +124,20 @@ void FuzzCsv(const uint8_t* data, size_t size) {
   const std::string c = WriteFile("controls.csv", data, cut);
   const std::string p = WriteFile("poses.csv", data + cut, size - cut);
   static const auto unicycle = kincal::MakeModel("unicycle");
-  Expect([&] { kincal::ReadCsvRecording(c, p, *unicycle); });
+  Expect([&] { (void)kincal::ReadCsvRecording(c, p, *unicycle); });
 }
 
 void FuzzMrclam(const uint8_t* data, size_t size) {
   const size_t cut = size == 0 ? 0 : std::min<size_t>(size, 1 + data[0] * size / 256);
   WriteFile("Robot1_Odometry.dat", data, cut);
   WriteFile("Robot1_Groundtruth.dat", data + cut, size - cut);
-  Expect([&] { kincal::ReadMrclam(g_dir, 1); });
+  Expect([&] { (void)kincal::ReadMrclam(g_dir, 1); });
 }
 
 void FuzzYaml(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("config.yaml", data, size);
   Expect([&] { kincal::daemon::Validate(kincal::daemon::LoadDaemonConfig(path)); });
-  Expect([&] { kincal::LoadScenario(path); });
+  Expect([&] { (void)kincal::LoadScenario(path); });
   Expect([&] { kincal::vision::ReadTargetLayoutYaml(path); });
 }
 
