@@ -29,6 +29,13 @@ constexpr double kRefitCovarianceInflation = 4.0;
 constexpr size_t kRefitMinPoses = 10;
 // A parameter has converged when its sigma is below this fraction of its prior sigma.
 constexpr double kConvergedSigmaFraction = 0.05;
+// A verdict against the model is judged again on fresh innovations when a parameter's sigma
+// has fallen this much since the check's window began (RejudgeOnSettledInnovations).
+constexpr double kCheckForgetFactor = 2.0;
+// The innovations after the model check's window restarted before the pose noise's level
+// may call the model inadequate (the check's own least for a verdict,
+// ModelCheckOptions::min_samples).
+constexpr int kSettledInnovations = 100;
 // A re-fit replaces the running estimate only if every parameter's re-fit sigma is within
 // this factor of the running one (its window excites the parameters) ...
 constexpr double kRefitMaxSigmaRatio = 3.0;
@@ -463,20 +470,39 @@ void FilterStage::Recover(const PoseSample& p, TimeNs t, bool diverged) {
   }
 }
 
+bool FilterStage::RejudgeOnSettledInnovations(const kincal::params_t& m,
+                                              const ModelCheckVerdict& verdict) {
+  const int np = static_cast<int>(m.sigmas.size());
+  if (check_sigma_peak_.size() != np) check_sigma_peak_ = VecN<kMaxState>::Zero(np);
+  bool fell = false;
+  for (int i = 0; i < np; ++i) {
+    const double s = m.sigmas[static_cast<size_t>(i)];
+    check_sigma_peak_[i] = std::max(check_sigma_peak_[i], s);
+    fell = fell || kCheckForgetFactor * s < check_sigma_peak_[i];
+  }
+  if (!fell || !ModelInadequate(verdict)) return false;
+  check_->Reset();
+  for (int i = 0; i < np; ++i) check_sigma_peak_[i] = m.sigmas[static_cast<size_t>(i)];
+  return true;
+}
+
 // ---- outputs ----------------------------------------------------------------------------
 
+// A named effect, or pose noise the model cannot explain; the noise only once the check's
+// window holds kSettledInnovations innovations from after its last restart (before that,
+// the adaptive noise still answers the innovations of an estimate that had not settled).
 bool FilterStage::ModelInadequate(const ModelCheckVerdict& v) const {
-  return !v.suspected_effect.empty() || adapter_.level() > kInadequateNoiseLevel;
+  return !v.suspected_effect.empty() ||
+         (v.window >= kSettledInnovations && adapter_.level() > kInadequateNoiseLevel);
 }
 
 // The status the parameters are published with; health reports the same.
-int FilterStage::ParamsStatus(bool sigmas_small, TimeNs t) const {
+int FilterStage::ParamsStatus(bool sigmas_small, const ModelCheckVerdict& verdict, TimeNs t) const {
   // Robust updates that have not brought the innovations back within the gate for this
   // long: the filter has lost the robot. Shorter streaks are the model's error.
   if (consecutive_gated_ >= kDivergedStreakFactor * opt_.filter.divergence_gated) {
     return kincal::params_t::STATUS_DIVERGED;
   }
-  const ModelCheckVerdict verdict = check_->Verdict();
   if (ModelInadequate(verdict) || consecutive_gated_ >= opt_.filter.divergence_gated) {
     return kincal::params_t::STATUS_MODEL_INADEQUATE;
   }
@@ -504,7 +530,9 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
     sigmas_small =
         sigmas_small && m.sigmas[i] < kConvergedSigmaFraction * prior_sigma_[static_cast<int>(i)];
   }
-  m.status = static_cast<int8_t>(ParamsStatus(sigmas_small, t));
+  ModelCheckVerdict verdict = check_->Verdict();
+  if (RejudgeOnSettledInnovations(m, verdict)) verdict = check_->Verdict();
+  m.status = static_cast<int8_t>(ParamsStatus(sigmas_small, verdict, t));
   status_.store(m.status);
   out_.params(m.utime, m);
   FillCheckpoint(m, effects_, &estimate_);
@@ -545,7 +573,10 @@ void FilterStage::StartFilterAt(const std::shared_ptr<const System>& sys,
   cal->controls() = cal_->controls();
   cal->Initialize(t, p.xytheta, p.covariance, mean, cov);
   cal_ = std::move(cal);
-  if (sys != sys_) check_ = std::make_unique<ModelCheck>(*sys);
+  if (sys != sys_) {
+    check_ = std::make_unique<ModelCheck>(*sys);
+    check_sigma_peak_.resize(0);
+  }
   sys_ = sys;
   adapter_.Reset();
   consecutive_gated_ = 0;

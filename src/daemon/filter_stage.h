@@ -143,7 +143,13 @@ class FilterStage {
   void PublishParams(TimeNs t, bool force);
   void PublishFinalCalibration(TimeNs t);
   void PublishModelCheck(TimeNs t);
-  int ParamsStatus(bool sigmas_small, TimeNs t) const;
+  int ParamsStatus(bool sigmas_small, const ModelCheckVerdict& verdict, TimeNs t) const;
+  // A verdict against the model reached while the estimate was still moving is judged again
+  // on fresh innovations: when it calls the model inadequate and a parameter's sigma has
+  // fallen by kCheckForgetFactor since the check's window began, the window restarts (issue
+  // 34: a declared lag, estimated right, was called inadequate for 17 s by the innovations
+  // of the first seconds). True when it restarted.
+  bool RejudgeOnSettledInnovations(const kincal::params_t& m, const ModelCheckVerdict& verdict);
   bool ModelInadequate(const ModelCheckVerdict& v) const;
   void ApplyBatch(const BatchCalibration& r, const PoseSample& p, TimeNs t);
   void PublishCalibration(const BatchCalibration& r, TimeNs t);
@@ -171,7 +177,8 @@ class FilterStage {
   TimeBase time_base_;
   std::unique_ptr<OnlineCalibrator> cal_;
   std::unique_ptr<ModelCheck> check_;
-  PoseRing recent_;  // poses the filter used, for a batch re-fit when it diverges
+  VecN<kMaxState> check_sigma_peak_;  // each parameter's largest sigma in the check's window
+  PoseRing recent_;                   // poses the filter used, for a batch re-fit when it diverges
   PoseNoiseAdapter adapter_;
   BatchTier batch_;
   std::optional<BatchCalibration> calibration_;  // the last good batch
