@@ -37,6 +37,8 @@ def main() -> int:
     assert d["plan"]["stays_in"], "the plan left the arena"
     plan = d["plan"]["time_to_target_s"]
     usual = [m["time_to_target_s"] for m in d["usual"] if m["stays_in"]]
+    # all() over an empty list is True: without a usual motion inside, nothing was compared.
+    assert usual, "no usual motion stayed inside the arena: nothing to compare the plan with"
     assert plan is not None and all(plan < u for u in usual), (plan, usual)
     assert os.path.getsize(os.path.join(out, "plan.png")) > 10000
     print(f"check_plan: plan {plan} s, usual {sorted(usual)}")
