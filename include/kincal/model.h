@@ -85,6 +85,9 @@ Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* o
 // Convenience: throws std::invalid_argument with the same message.
 std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);
 
+// The parameters' names as a list for messages ("k_v, k_steer, steer_offset, wheelbase").
+std::string ParamNames(const std::vector<ParamInfo>& params);
+
 }  // namespace kincal
 
 // Ends a model's implementation file, after its anonymous namespace, inside namespace

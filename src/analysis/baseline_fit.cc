@@ -100,10 +100,9 @@ StatusOr<Eigen::VectorXd> InitialParams(const System& sys,
   for (const auto& [name, v] : init) {
     const int i = sys.ParamIndex(name);
     if (i < 0) {
-      std::string known;
-      for (const auto& q : sys.params()) known += (known.empty() ? "" : ", ") + q.name;
       return Status::Error("--init: model '" + std::string(sys.model().name()) +
-                           "' has no parameter '" + name + "' (its parameters: " + known + ")");
+                           "' has no parameter '" + name +
+                           "' (its parameters: " + ParamNames(sys.params()) + ")");
     }
     p[i] = v;
   }
@@ -113,8 +112,7 @@ StatusOr<Eigen::VectorXd> InitialParams(const System& sys,
 StatusOr<std::vector<int>> FixParams(const System& sys, const std::map<std::string, double>& fixed,
                                      Eigen::VectorXd* p0) {
   const KinematicModel& model = sys.model();
-  std::string known;
-  for (const auto& q : model.params()) known += (known.empty() ? "" : ", ") + q.name;
+  const std::string known = ParamNames(model.params());
   std::vector<int> idx;
   for (const auto& [name, v] : fixed) {
     const int i = model.ParamIndex(name);

@@ -35,4 +35,10 @@ std::shared_ptr<const KinematicModel> MakeModel(std::string_view name) {
   return m;
 }
 
+std::string ParamNames(const std::vector<ParamInfo>& params) {
+  std::string out;
+  for (const auto& p : params) out += (out.empty() ? "" : ", ") + p.name;
+  return out;
+}
+
 }  // namespace kincal

@@ -128,8 +128,7 @@ bool RobotOptions::IsValid(std::string* error) const {
     *error = "robot: " + s.message();
     return false;
   }
-  std::string known;
-  for (const auto& q : sys->model().params()) known += (known.empty() ? "" : ", ") + q.name;
+  const std::string known = ParamNames(sys->model().params());
   for (const auto& [name, v] : fixed) {
     if (!Expect(sys->model().ParamIndex(name) >= 0 && std::isfinite(v),
                 "robot.fixed: '" + name + "' is not a parameter of model '" + model +

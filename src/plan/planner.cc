@@ -225,8 +225,7 @@ Status HoldParameters(const System& sys, const std::map<std::string, double>& fi
                       Eigen::VectorXd* params, Eigen::MatrixXd* prior_cov, PlanOptions* o) {
   if (fixed.empty()) return {};
   const KinematicModel& model = sys.model();
-  std::string known;
-  for (const auto& q : model.params()) known += (known.empty() ? "" : ", ") + q.name;
+  const std::string known = ParamNames(model.params());
   std::vector<bool> held(static_cast<size_t>(sys.num_params()), false);
   for (const auto& [name, v] : fixed) {
     const int i = model.ParamIndex(name);

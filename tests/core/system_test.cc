@@ -150,5 +150,10 @@ INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 5),
                            return AllModelScenarios()[static_cast<size_t>(info.param)].model;
                          });
 
+TEST(Model, ParamNamesListsTheParametersForMessages) {
+  EXPECT_EQ(ParamNames(MakeModel("bicycle")->params()), "k_v, k_steer, steer_offset, wheelbase");
+  EXPECT_EQ(ParamNames({}), "");
+}
+
 }  // namespace
 }  // namespace kincal
