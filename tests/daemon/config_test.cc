@@ -10,6 +10,7 @@
 
 #include "daemon/daemon_test_util.h"
 #include "source_dir.h"
+#include "windows_text.h"
 
 namespace kincal::daemon {
 namespace {
@@ -86,9 +87,8 @@ TEST(Config, CrlfAndByteOrderMarkReadAsPlainText) {
   const std::string text =
       "source: replay\nreplay: {path: run.lcm}\npose:\n  method: lowe\n"
       "robot:\n  model: diffdrive\n  fixed: {d: 0.3}\n";
-  std::string windows = "\xEF\xBB\xBF";
-  for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
-  const DaemonConfig c = LoadDaemonConfig(WriteConfig("crlf.yaml", windows));
+  const DaemonConfig c =
+      LoadDaemonConfig(WriteConfig("crlf.yaml", ::kincal::testing::WindowsText(text)));
   EXPECT_EQ(c.source, SourceKind::kReplay);
   EXPECT_TRUE(c.replay.path.ends_with("/run.lcm")) << c.replay.path;
   EXPECT_EQ(c.pose.method, PoseMethod::kLowe);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "io/io_test_util.h"
+#include "windows_text.h"
 
 namespace kincal {
 namespace {
@@ -32,14 +33,9 @@ TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
   const auto model = MakeModel("unicycle");
   const std::string c = "t,v,omega\n0,1,0\n1,1,0.5\n2,1,0\n";
   const std::string p = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0.1,0.2\n";
-  auto windows = [](const std::string& text) {
-    std::string out = "\xEF\xBB\xBF";
-    for (char ch : text) out += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
-    return out;
-  };
   const Recording plain = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model).value();
-  const StatusOr<Recording> win =
-      ReadCsvRecording(Write("cw.csv", windows(c)), Write("pw.csv", windows(p)), *model);
+  const StatusOr<Recording> win = ReadCsvRecording(
+      Write("cw.csv", testing::WindowsText(c)), Write("pw.csv", testing::WindowsText(p)), *model);
   ASSERT_TRUE(win.ok()) << win.status().message();
   ASSERT_EQ(win->poses.size(), plain.poses.size());
   for (size_t k = 0; k < plain.poses.size(); ++k) {

@@ -18,6 +18,7 @@
 #include "kincal/vision/synthetic.h"
 #include "kincal/vision/target.h"
 #include "vision/vision_test_util.h"
+#include "windows_text.h"
 
 namespace kincal::vision {
 namespace {
@@ -82,9 +83,7 @@ TEST(Calibration, PointsFileWithCrlfAndByteOrderMark) {
       "view,X,Y,Z,u,v\n0,0,0,0,100.5,237.257\n0,0.1,0,0,180,237.5\n"
       "1,0,0,0,101,238\n";
   std::ofstream(plain, std::ios::binary) << rows;
-  std::string crlf = "\xEF\xBB\xBF";
-  for (char ch : rows) crlf += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
-  std::ofstream(windows, std::ios::binary) << crlf;
+  std::ofstream(windows, std::ios::binary) << ::kincal::testing::WindowsText(rows);
   const auto a = ReadCalibrationPoints(plain);
   const auto b = ReadCalibrationPoints(windows);
   ASSERT_EQ(a.size(), 2u);

@@ -18,6 +18,7 @@
 #include "kincal/vision/synthetic.h"
 #include "kincal/vision/target.h"
 #include "vision/vision_test_util.h"
+#include "windows_text.h"
 
 namespace kincal::vision {
 namespace {
@@ -74,10 +75,8 @@ TEST(Camera, CrlfAndByteOrderMarkReadAsPlainText) {
   for (const std::string& path : {opencv, ros}) {
     std::ifstream in(path);
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    std::string windows = "\xEF\xBB\xBF";
-    for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
     const std::string crlf = path + ".crlf.yaml";
-    std::ofstream(crlf, std::ios::binary) << windows;
+    std::ofstream(crlf, std::ios::binary) << ::kincal::testing::WindowsText(text);
     const CameraModel c = ReadCameraYaml(crlf);
     EXPECT_EQ(c.width, TestCamera().width) << crlf;
     EXPECT_DOUBLE_EQ(c.fx, TestCamera().fx) << crlf;

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 
+#include "windows_text.h"
+
 namespace kincal::vision {
 namespace {
 
@@ -19,10 +21,8 @@ TEST(OpenCvFile, ByteOrderMarkAndCrlfAreTaken) {
   }
   std::ifstream in(plain);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::string windows = "\xEF\xBB\xBF";
-  for (char ch : text) windows += ch == '\n' ? std::string("\r\n") : std::string(1, ch);
   const std::string crlf = (dir / "kincal_ocv_crlf.yaml").string();
-  std::ofstream(crlf, std::ios::binary) << windows;
+  std::ofstream(crlf, std::ios::binary) << ::kincal::testing::WindowsText(text);
   for (const std::string& path : {plain, crlf}) {
     cv::FileStorage fs;
     const Status s = OpenOpenCvFile(path, "test", &fs);
