@@ -193,9 +193,9 @@ struct CalibrationOptions {
   // span already fitted: a run of length T costs O(log T) batches, not O(T) (a --fast
   // replay of hours waits for each). 0: every every_s regardless.
   double growth = 0.25;
-  // The fit's threads, 0: one per core. One leaves a core to the pipeline on a 2-core
-  // machine; the result does not depend on it.
-  int threads = 1;
+  // The fit's threads, 0: one per core (they run below the pipeline's priority, so the
+  // frames keep theirs); the result does not depend on it.
+  int threads = 0;
   int max_effects = 4;         // robot.effects: auto: effects the selection may accept
   int max_poses = 108'000;     // 1 h at 30 Hz
   int max_controls = 432'000;  // 1 h at 120 Hz
