@@ -146,6 +146,49 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
       << "a missing checkpoint is an error, not a silent fresh start";
 }
 
+// Reproduces a robot.fixed run whose checkpoint could be neither resumed nor exported:
+// "variance of 'd' (0) is not plausible". A held parameter is written as held (zero
+// variance, listed in `held`), read back, resumed held or, when this run frees it, with
+// this run's prior spread; the free parameters carry on.
+TEST(DaemonSim, ResumesAndExportsACheckpointWithAHeldParameter) {
+  DaemonConfig c = SimConfig5Hz(40);  // a batch at 30 s and one at shutdown
+  const auto truth = Truth(c);
+  c.robot.fixed = {{"d", truth.at("d")}};
+  c.checkpoint.path = TempPath("held.json");
+  {
+    Daemon d(c);
+    ASSERT_EQ(d.Run(), 0);
+  }
+  StatusOr<Checkpoint> saved = ReadCheckpoint(c.checkpoint.path);
+  ASSERT_TRUE(saved.ok()) << saved.status().message();
+  EXPECT_EQ(saved->source, "batch");
+  EXPECT_EQ(saved->held, std::vector<std::string>{"d"});
+  EXPECT_EQ(saved->values[2], truth.at("d"));
+  std::ostringstream yaml;
+  WriteExportYaml(yaml, *saved, c.checkpoint.path);
+  EXPECT_NE(yaml.str().find("held: true"), std::string::npos) << yaml.str();
+  for (const bool still_held : {true, false}) {
+    DaemonConfig c2 = c;
+    c2.sim.duration_s = 15;
+    c2.checkpoint.resume = c.checkpoint.path;
+    c2.checkpoint.path.clear();
+    if (!still_held) c2.robot.fixed.clear();
+    Daemon d2(c2);
+    ASSERT_EQ(d2.Run(), 0) << "held " << still_held;
+    const Checkpoint e = d2.Estimate();
+    ASSERT_EQ(e.names.size(), 3u);
+    if (still_held) {  // fused with the first run's: the radii at least as tight
+      for (int i = 0; i < 2; ++i) EXPECT_LE(e.covariance(i, i), saved->covariance(i, i));
+      EXPECT_EQ(e.values[2], truth.at("d"));
+      EXPECT_EQ(e.held, std::vector<std::string>{"d"});
+    } else {
+      EXPECT_TRUE(e.held.empty());
+      EXPECT_GT(e.covariance(2, 2), 0.0);
+    }
+    ExpectWithin3Sigma(e, truth);
+  }
+}
+
 // Reproduces issue 16 (items 5 and 7): two daemons recording to one path both exited 0 and
 // the first recording was lost; an unwritable checkpoint folder only showed as logged errors
 // and exit 0.

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <thread>
+#include <vector>
 
 namespace kincal::daemon {
 
@@ -25,37 +26,64 @@ bool BatchTierOptions::IsValid(std::string* error) const {
   return store.IsValid(error);
 }
 
+namespace {
+
+Eigen::MatrixXd Sub(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& idx) {
+  const auto k = static_cast<Eigen::Index>(idx.size());
+  Eigen::MatrixXd out(k, k);
+  for (Eigen::Index a = 0; a < k; ++a) {
+    for (Eigen::Index b = 0; b < k; ++b) out(a, b) = m(idx[a], idx[b]);
+  }
+  return out;
+}
+
+}  // namespace
+
 BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& resumed,
                                   std::string* why) {
   const auto n = static_cast<Eigen::Index>(r.params.size());
   bool same = resumed.effects == r.effects && resumed.names.size() == r.params.size() &&
-              resumed.covariance.rows() == n && resumed.covariance.cols() == n;
+              resumed.covariance.rows() == n && resumed.covariance.cols() == n &&
+              r.covariance.rows() == n;
   for (size_t i = 0; same && i < r.params.size(); ++i) same = resumed.names[i] == r.params[i].name;
   if (!same) {
     *why = "the resumed calibration has other parameters or effects";
     return r;
   }
-  const Eigen::LDLT<Eigen::MatrixXd> pb(r.covariance), pr(resumed.covariance);
-  if (pb.info() != Eigen::Success || pr.info() != Eigen::Success || !pb.isPositive() ||
+  // Held parameters (robot.fixed: zero variance) keep this run's value; the free ones are
+  // fused, and each must have been free in the resumed run too.
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (r.covariance(i, i) <= 0.0) continue;
+    if (resumed.covariance(i, i) <= 0.0) {
+      *why = "the resumed calibration held " + r.params[static_cast<size_t>(i)].name +
+             ", which this run estimates";
+      return r;
+    }
+    free.push_back(i);
+  }
+  const auto m = static_cast<Eigen::Index>(free.size());
+  const Eigen::LDLT<Eigen::MatrixXd> pb(Sub(r.covariance, free)), pr(Sub(resumed.covariance, free));
+  if (m == 0 || pb.info() != Eigen::Success || pr.info() != Eigen::Success || !pb.isPositive() ||
       !pr.isPositive()) {
-    *why = "a covariance is not positive definite";
+    *why = m == 0 ? "every parameter is held" : "a covariance is not positive definite";
     return r;
   }
-  const Eigen::MatrixXd id = Eigen::MatrixXd::Identity(n, n);
-  const Eigen::MatrixXd info = pb.solve(id) + pr.solve(id);
-  const Eigen::LDLT<Eigen::MatrixXd> fused(info);
-  Eigen::VectorXd xb(n), xr(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    xb[i] = r.params[static_cast<size_t>(i)].value;
-    xr[i] = resumed.values[static_cast<size_t>(i)];
+  const Eigen::MatrixXd id = Eigen::MatrixXd::Identity(m, m);
+  const Eigen::LDLT<Eigen::MatrixXd> fused(pb.solve(id) + pr.solve(id));
+  Eigen::VectorXd xb(m), xr(m);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    xb[k] = r.params[static_cast<size_t>(free[k])].value;
+    xr[k] = resumed.values[static_cast<size_t>(free[k])];
   }
+  Eigen::MatrixXd cov = fused.solve(id);
+  cov = 0.5 * (cov + cov.transpose()).eval();
+  const Eigen::VectorXd x = cov * (pb.solve(xb) + pr.solve(xr));
   BatchCalibration out = r;
-  out.covariance = fused.solve(id);
-  out.covariance = 0.5 * (out.covariance + out.covariance.transpose()).eval();
-  const Eigen::VectorXd x = out.covariance * (pb.solve(xb) + pr.solve(xr));
-  for (Eigen::Index i = 0; i < n; ++i) {
-    out.params[static_cast<size_t>(i)].value = x[i];
-    out.params[static_cast<size_t>(i)].sigma = std::sqrt(out.covariance(i, i));
+  for (Eigen::Index a = 0; a < m; ++a) {
+    for (Eigen::Index b = 0; b < m; ++b) out.covariance(free[a], free[b]) = cov(a, b);
+    out.params[static_cast<size_t>(free[a])].value = x[a];
+    out.params[static_cast<size_t>(free[a])].sigma = std::sqrt(cov(a, a));
   }
   out.prior = "fused with the resumed calibration (" +
               (resumed.source == "batch"

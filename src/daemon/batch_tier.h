@@ -43,7 +43,7 @@ struct BatchTierOptions {
   double apply_after_s = 5.0;  // lossless: results applied this long after the start
   // Analyze's threads, 0: one per core (the result does not depend on them). They run
   // below the pipeline (batch_worker.h), so the frames keep their priority.
-  int threads = 1;
+  int threads = 0;
   int max_effects = 4;                  // effects the selection may accept
   std::map<std::string, double> fixed;  // robot.fixed: held (kincal analyze --fix)
   CalibrationStoreOptions store;
@@ -54,6 +54,8 @@ struct BatchTierOptions {
 // independent data): information added, x = P (Pb^-1 xb + Pr^-1 xr), P = (Pb^-1 + Pr^-1)^-1.
 // Only when both describe the same model, effects and parameters in the same order;
 // otherwise the batch alone, with *why saying what differs. `r.prior` names what was fused.
+// Parameters the batch holds (robot.fixed: zero variance) keep its value and are left out
+// of the fusion; a parameter the resumed run held but this one estimates is a difference.
 BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& resumed,
                                   std::string* why);
 

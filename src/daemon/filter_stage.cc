@@ -113,15 +113,23 @@ void HoldFixed(const System& sys, const std::map<std::string, double>& fixed, Ve
 }
 
 int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior) {
+  const auto held = [&ck](const std::string& name) {
+    return std::find(ck.held.begin(), ck.held.end(), name) != ck.held.end();
+  };
   int matched = 0;
   for (size_t i = 0; i < ck.names.size(); ++i) {
     const int a = sys.ParamIndex(ck.names[i]);
     if (a < 0) continue;
     ++matched;
     prior->mean[a] = ck.values[i];
+    // Held in the earlier run: its value, with this run's prior spread (zero would freeze
+    // it; this run's robot.fixed holds it again when it is still held).
+    if (held(ck.names[i])) continue;
     for (size_t k = 0; k < ck.names.size(); ++k) {
       const int b = sys.ParamIndex(ck.names[k]);
-      if (b >= 0) prior->covariance(a, b) = ck.covariance(static_cast<int>(i), static_cast<int>(k));
+      if (b >= 0 && !held(ck.names[k])) {
+        prior->covariance(a, b) = ck.covariance(static_cast<int>(i), static_cast<int>(k));
+      }
     }
   }
   return matched;
@@ -187,6 +195,7 @@ FilterStage::FilterStage(const System& sys, FilterStageOptions options, FilterPr
       f.control_psd.empty() ? std::vector<double>(static_cast<size_t>(sys.num_controls()), 0.0)
                             : f.control_psd;
   calibrator_options_.noise.pose_psd = Eigen::Vector3d(f.pose_psd[0], f.pose_psd[1], f.pose_psd[2]);
+  for (const auto& [name, value] : opt_.fixed) held_.push_back(name);
 }
 
 FilterStage::~FilterStage() = default;
@@ -536,6 +545,7 @@ void FilterStage::PublishParams(TimeNs t, bool force) {
   status_.store(m.status);
   out_.params(m.utime, m);
   FillCheckpoint(m, effects_, &estimate_);
+  MarkHeld(held_, &estimate_);  // the filter's negligible sigma: zero, as the batch's
   out_.estimate(estimate_);
 }
 
@@ -614,6 +624,7 @@ void FilterStage::PublishCalibration(const BatchCalibration& r, TimeNs t) {
     FillParamsFromCalibration(*good, std::string(sys_->model().name()), counters_.updates.load(),
                               PipelineNsToUtime(t), &m);
     FillCheckpoint(m, good->effects, &calibration_checkpoint_);
+    MarkHeld(held_, &calibration_checkpoint_);
     calibration_checkpoint_.batch_sequence = good->sequence;
     calibration_checkpoint_.batch_poses = good->num_poses;
   }

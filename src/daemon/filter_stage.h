@@ -183,6 +183,7 @@ class FilterStage {
   BatchTier batch_;
   std::optional<BatchCalibration> calibration_;  // the last good batch
   Checkpoint calibration_checkpoint_;            // the same, as a checkpoint
+  std::vector<std::string> held_;                // robot.fixed's names (checkpoints)
   kincal::calibration_t calibration_msg_{};
   PoseSample last_pose_;  // the newest pose the filter took (a restart's starting pose)
   std::vector<AddedEffect> added_;

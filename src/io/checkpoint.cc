@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
+#include <vector>
 
 #include "kincal/io/output_file.h"
 #include "kincal/system.h"
@@ -40,6 +41,16 @@ void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& e
     for (int k = 0; k < n; ++k) {
       c->covariance(i, k) = m.covariance[static_cast<size_t>(i)][static_cast<size_t>(k)];
     }
+  }
+}
+
+void MarkHeld(const std::vector<std::string>& names, Checkpoint* c) {
+  c->held.clear();
+  for (size_t i = 0; i < c->names.size(); ++i) {
+    if (std::find(names.begin(), names.end(), c->names[i]) == names.end()) continue;
+    c->held.push_back(c->names[i]);
+    c->covariance.row(static_cast<Eigen::Index>(i)).setZero();
+    c->covariance.col(static_cast<Eigen::Index>(i)).setZero();
   }
 }
 
@@ -70,6 +81,7 @@ Status WriteCheckpoint(const std::string& path, const Checkpoint& c) {
       cov[static_cast<size_t>(i)].push_back(c.covariance(i, k));
   }
   j["covariance"] = cov;
+  if (!c.held.empty()) j["held"] = c.held;
   return WriteFileAtomically(path, j.dump(1), "checkpoint");
 }
 
@@ -86,6 +98,59 @@ double Scale(const ParamInfo& p) { return std::max(std::abs(p.default_value), p.
 
 }  // namespace
 
+namespace {
+
+// One parameter's value and variance (a held one: zero variance and no correlation).
+bool ParameterIsPlausible(const ParamInfo& p, const Checkpoint& c, int k, bool held,
+                          std::string* error) {
+  const double value = c.values[static_cast<size_t>(k)];
+  const double limit = kCheckpointMaxScale * Scale(p);
+  if (!std::isfinite(value) || std::abs(value) > limit || value < p.min_value) {
+    *error = "value of '" + p.name + "' (" + FormatNumber(value) + " " + p.unit +
+             ") is not plausible: expected a finite value within +-" + FormatNumber(limit) +
+             (std::isfinite(p.min_value) ? " and >= " + FormatNumber(p.min_value) : "");
+    return false;
+  }
+  const double var = c.covariance(k, k);
+  if (held) {
+    if (!c.covariance.row(k).isZero(0.0) || !c.covariance.col(k).isZero(0.0)) {
+      *error = "'" + p.name + "' is held but has a variance or a correlation: expected zeros";
+      return false;
+    }
+    return true;
+  }
+  const double min_sigma = kCheckpointMinSigmaFraction * p.default_sigma;
+  if (!(var >= min_sigma * min_sigma) || !(std::sqrt(var) <= limit)) {
+    *error = "variance of '" + p.name + "' (" + FormatNumber(var) +
+             ") is not plausible: expected a sigma between " + FormatNumber(min_sigma) + " and " +
+             FormatNumber(limit) + " " + p.unit;
+    return false;
+  }
+  return true;
+}
+
+// The covariance of the free parameters: symmetric positive definite.
+bool FreeCovarianceIsValid(const Checkpoint& c, const std::vector<Eigen::Index>& free,
+                           std::string* error) {
+  const auto m = static_cast<Eigen::Index>(free.size());
+  Eigen::MatrixXd sub(m, m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    for (Eigen::Index b = 0; b < m; ++b) sub(a, b) = c.covariance(free[a], free[b]);
+  }
+  const double asym = m == 0 ? 0.0 : (sub - sub.transpose()).cwiseAbs().maxCoeff();
+  if (m > 0 && !(asym <= 1e-9 * sub.diagonal().cwiseAbs().maxCoeff())) {
+    *error = "covariance is not symmetric";
+    return false;
+  }
+  if (m > 0 && Eigen::LLT<Eigen::MatrixXd>(sub).info() != Eigen::Success) {
+    *error = "covariance is not positive definite";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 bool CheckpointIsValid(const Checkpoint& c, std::string* error) {
   std::unique_ptr<System> sys;
   if (const Status s = MakeSystem(c.model, c.effects, {}, &sys); !s.ok()) {
@@ -99,40 +164,25 @@ bool CheckpointIsValid(const Checkpoint& c, std::string* error) {
              "' with its effects, found " + std::to_string(c.names.size());
     return false;
   }
+  for (const auto& h : c.held) {
+    if (std::find(c.names.begin(), c.names.end(), h) == c.names.end()) {
+      *error = "held parameter '" + h + "' is not a parameter of model '" + c.model + "'";
+      return false;
+    }
+  }
+  std::vector<Eigen::Index> free;
   for (size_t i = 0; i < n; ++i) {
     const ParamInfo& p = sys->params()[i];
-    const int k = static_cast<int>(i);
     if (c.names[i] != p.name) {
       *error = "parameter " + std::to_string(i + 1) + " is '" + c.names[i] + "', expected '" +
                p.name + "'";
       return false;
     }
-    const double limit = kCheckpointMaxScale * Scale(p);
-    if (!std::isfinite(c.values[i]) || std::abs(c.values[i]) > limit || c.values[i] < p.min_value) {
-      *error = "value of '" + p.name + "' (" + FormatNumber(c.values[i]) + " " + p.unit +
-               ") is not plausible: expected a finite value within +-" + FormatNumber(limit) +
-               (std::isfinite(p.min_value) ? " and >= " + FormatNumber(p.min_value) : "");
-      return false;
-    }
-    const double var = c.covariance(k, k);
-    const double min_sigma = kCheckpointMinSigmaFraction * p.default_sigma;
-    if (!(var >= min_sigma * min_sigma) || !(std::sqrt(var) <= limit)) {
-      *error = "variance of '" + p.name + "' (" + FormatNumber(var) +
-               ") is not plausible: expected a sigma between " + FormatNumber(min_sigma) + " and " +
-               FormatNumber(limit) + " " + p.unit;
-      return false;
-    }
+    const bool held = std::find(c.held.begin(), c.held.end(), p.name) != c.held.end();
+    if (!ParameterIsPlausible(p, c, static_cast<int>(i), held, error)) return false;
+    if (!held) free.push_back(static_cast<Eigen::Index>(i));
   }
-  const double asym = (c.covariance - c.covariance.transpose()).cwiseAbs().maxCoeff();
-  if (!(asym <= 1e-9 * c.covariance.diagonal().cwiseAbs().maxCoeff())) {
-    *error = "covariance is not symmetric";
-    return false;
-  }
-  if (Eigen::LLT<Eigen::MatrixXd>(c.covariance).info() != Eigen::Success) {
-    *error = "covariance is not positive definite";
-    return false;
-  }
-  return true;
+  return FreeCovarianceIsValid(c, free, error);
 }
 
 namespace {
@@ -169,6 +219,7 @@ Checkpoint ParseCheckpoint(const std::string& path) {
     c.names = j.at("names").get<std::vector<std::string>>();
     c.units = j.at("units").get<std::vector<std::string>>();
     c.values = j.at("values").get<std::vector<double>>();
+    c.held = j.value("held", std::vector<std::string>{});
     const auto cov = j.at("covariance").get<std::vector<std::vector<double>>>();
     const size_t n = c.names.size();
     if (c.units.size() != n || c.values.size() != n || cov.size() != n) {
@@ -264,9 +315,10 @@ void WriteExportYaml(std::ostream& out, const Checkpoint& c, const std::string& 
         std::sqrt(std::max(0.0, c.covariance(static_cast<int>(i), static_cast<int>(i))));
     std::string unit = YamlScalar(c.units[i]);
     if (unit.front() != '"') unit = "\"" + unit + "\"";
+    const bool held = std::find(c.held.begin(), c.held.end(), c.names[i]) != c.held.end();
     out << "  " << YamlScalar(c.names[i]) << ": {value: " << c.values[i]
         << ", sigma: " << std::setprecision(3) << s << std::setprecision(9) << ", unit: " << unit
-        << "}\n";
+        << (held ? ", held: true" : "") << "}\n";
   }
   out << "covariance:   # row-major, in the order of 'parameters'\n";
   for (int i = 0; i < c.covariance.rows(); ++i) {

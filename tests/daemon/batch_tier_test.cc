@@ -179,6 +179,39 @@ TEST(BatchTier, FusesWithTheResumedCalibrationByInformation) {
   EXPECT_NE(why.find("other parameters or effects"), std::string::npos) << why;
 }
 
+// robot.fixed: the batch holds a parameter (zero variance); the free ones are still fused
+// with the resumed calibration, and the held one keeps the value it is held at.
+TEST(BatchTier, FusesTheFreeParametersWhenOneIsHeld) {
+  BatchCalibration r;
+  r.ok = true;
+  r.params = {{"k_v", "1", 0.90, 0.02, 0},
+              {"wheelbase", "m", 0.33, 0.0, 0},
+              {"k_steer", "1", 0.60, 0.01, 0}};
+  r.covariance = Eigen::Vector3d(4e-4, 0.0, 1e-4).asDiagonal();
+  Checkpoint resumed;
+  resumed.source = "batch";
+  resumed.batch_sequence = 3;
+  resumed.names = {"k_v", "wheelbase", "k_steer"};
+  resumed.values = {0.94, 0.31, 0.62};
+  resumed.covariance = Eigen::Vector3d(4e-4, 0.0, 1e-4).asDiagonal();
+  std::string why;
+  const BatchCalibration f = FusedWithResumed(r, resumed, &why);
+  EXPECT_NE(f.prior.find("batch 3"), std::string::npos) << why;
+  EXPECT_NEAR(f.params[0].value, 0.92, 1e-12);
+  EXPECT_NEAR(f.params[0].sigma, std::sqrt(2e-4), 1e-12);
+  EXPECT_NEAR(f.params[2].value, 0.61, 1e-12);
+  EXPECT_EQ(f.params[1].value, 0.33);  // held: this run's value, not the resumed one
+  EXPECT_EQ(f.params[1].sigma, 0.0);
+  EXPECT_EQ(f.covariance(1, 1), 0.0);
+  EXPECT_EQ(f.covariance(0, 1), 0.0);
+  // A parameter the resumed run held but this one estimates: not the same calibration.
+  r.covariance(1, 1) = 1e-6;
+  r.params[1].sigma = 1e-3;
+  const BatchCalibration alone = FusedWithResumed(r, resumed, &why);
+  EXPECT_TRUE(alone.prior.empty());
+  EXPECT_NE(why.find("wheelbase"), std::string::npos) << why;
+}
+
 TEST(BatchTier, OptionsAreChecked) {
   std::string error;
   BatchTierOptions o;

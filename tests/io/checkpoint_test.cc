@@ -74,6 +74,41 @@ TEST(Checkpoint, ImplausibleValuesAndCovariancesAreRefusedByName) {
   EXPECT_NE(Refusal(c).find("is 'wheelbase', expected 'd'"), std::string::npos) << Refusal(c);
 }
 
+// robot.fixed: a held parameter has zero variance and no correlation, which a free one may
+// not have; it round-trips as held and exports as held.
+TEST(Checkpoint, AHeldParameterHasNoVarianceAndRoundTrips) {
+  Checkpoint c = Good();
+  c.covariance(0, 2) = c.covariance(2, 0) = 1e-9;
+  c.covariance(2, 2) = 2e-8;
+  MarkHeld({"d", "not_a_parameter"}, &c);
+  EXPECT_EQ(c.held, std::vector<std::string>{"d"});
+  EXPECT_EQ(c.covariance(2, 2), 0.0);
+  EXPECT_EQ(c.covariance(0, 2), 0.0);
+  EXPECT_EQ(Refusal(c), "");
+  const std::string path = TempPath("held.json");
+  ASSERT_TRUE(WriteCheckpoint(path, c).ok());
+  StatusOr<Checkpoint> r = ReadCheckpoint(path);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->held, c.held);
+  EXPECT_EQ(r->covariance, c.covariance);
+  std::ostringstream yaml;
+  WriteExportYaml(yaml, *r, path);
+  EXPECT_NE(yaml.str().find("  d: {value: 0.148, sigma: 0, unit: \"m\", held: true}"),
+            std::string::npos)
+      << yaml.str();
+  Checkpoint bad = c;
+  bad.covariance(1, 2) = bad.covariance(2, 1) = 1e-9;
+  EXPECT_NE(Refusal(bad).find("'d' is held but has a variance or a correlation"), std::string::npos)
+      << Refusal(bad);
+  bad = c;
+  bad.held = {"wheelbase"};
+  EXPECT_NE(Refusal(bad).find("held parameter 'wheelbase' is not a parameter"), std::string::npos)
+      << Refusal(bad);
+  bad = c;
+  bad.held.clear();  // the zero variance of an unheld parameter is still refused
+  EXPECT_NE(Refusal(bad).find("variance of 'd'"), std::string::npos) << Refusal(bad);
+}
+
 TEST(Checkpoint, AMissingFileIsAStatusWithErrnoText) {
   const StatusOr<Checkpoint> r = ReadCheckpoint(TempPath("no_such_checkpoint.json"));
   ASSERT_FALSE(r.ok());
@@ -88,7 +123,7 @@ TEST(Checkpoint, ReadRefusesAnImplausibleFileNamingIt) {
   c.values[0] = 1e200;
   const std::string path = TempPath("ck_big.json");
   ASSERT_TRUE(WriteCheckpoint(path, c).ok());
-  const StatusOr<Checkpoint> r = ReadCheckpoint(path);
+  StatusOr<Checkpoint> r = ReadCheckpoint(path);
   ASSERT_FALSE(r.ok()) << "accepted r_l = 1e200";
   EXPECT_NE(r.status().message().find(path + ": value of 'r_l'"), std::string::npos)
       << r.status().message();

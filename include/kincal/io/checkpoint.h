@@ -31,6 +31,9 @@ struct Checkpoint {
   std::vector<std::string> names, units;
   std::vector<double> values;
   Eigen::MatrixXd covariance;  // names.size() square
+  // Parameters held at their value (robot.fixed, kincal analyze --fix): not estimated, so
+  // their rows and columns of the covariance are zero.
+  std::vector<std::string> held;
 };
 
 // The estimate a kincal.params_t carries (model, filter, time, values and covariance by
@@ -38,12 +41,18 @@ struct Checkpoint {
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c);
 
+// Marks these parameters held (names not in the checkpoint are ignored): listed in
+// c->held, their covariance rows and columns set to zero.
+void MarkHeld(const std::vector<std::string>& names, Checkpoint* c);
+
 // A checkpoint to resume from or export must describe a real estimate: a known model with
 // its effects, every parameter of it in order, values finite, above the parameter's lower
 // bound and within kCheckpointMaxScale of its plausible magnitude (the larger of its
 // generic guess and that guess's sigma), each sigma at least kCheckpointMinSigmaFraction
 // of the guess's sigma (a smaller one freezes the filter), and the covariance symmetric
-// positive definite. False with a message naming the parameter and what was expected.
+// positive definite; a held parameter has zero variance and no correlation instead (the
+// free ones' covariance is then positive definite). False with a message naming the
+// parameter and what was expected.
 inline constexpr double kCheckpointMaxScale = 1e3;
 inline constexpr double kCheckpointMinSigmaFraction = 1e-5;
 bool CheckpointIsValid(const Checkpoint& c, std::string* error);
