@@ -92,6 +92,9 @@ def main() -> int:
             target = "≥ 1500 / ≥ 10000: " + ("met" if ok else "NOT met")
         out.append(f"| {w}×{h} | {fps(f'BM_KincalFullFrame/{w}/{h}')} | {fps(f'BM_KincalTracked/{w}/{h}')} | "
                    f"{fps(f'BM_OpenCvThresholdComponents/{w}/{h}')} | {fps(f'BM_OpenCvBlobDetectorSolvePnP/{w}/{h}')} | {target} |")
+    def cpu_ms(name):
+        return times[name] / 1e3
+
     def counter(name, key):
         b = counters.get(name)
         if b is None:
@@ -259,6 +262,27 @@ def users_sections(wall, times, counters, counter):
                 out.append(f"| {robot} | {'auto' if auto else 'none'} | {threads} | {b:.1f} | "
                            f"{counter(k, 'effects_accepted'):.0f} | {counter(k, 'heldout_mm_before'):.1f} → "
                            f"{counter(k, 'heldout_mm_after'):.1f} | ≤ 10 s: {'met' if b <= 10 else 'NOT met'} |")
+    pose_rows = [n for n in counters if n.startswith("BM_PoseStageFrame1280")]
+    prev_rows = sorted((n for n in counters if n.startswith("BM_PreviewFrame1280")),
+                       key=lambda n: -int(n.split("/")[1]))
+    if pose_rows and prev_rows:
+        def cpu_ms(name):
+            return times[name] / 1e3
+        pose_ms = cpu_ms(pose_rows[0])
+        out += ["", "## kincald's preview (KINCAL_PREVIEW) against the pose stage", "",
+                f"Pose stage at 1280x960 (MJPG decode, markers, pose): {pose_ms:.2f} ms of CPU a frame, "
+                f"{30 * pose_ms:.0f} ms a second at 30 Hz. One preview (the detection thread's copy, the "
+                "worker's downscale and JPEG, the LCM message), process CPU with OpenCV's thread pool:", "",
+                "| preview.width | preview px | ms CPU each | share of the pose stage at 5 Hz | target |",
+                "|---|---|---|---|---|"]
+        for n in prev_rows:
+            w = int(n.split("/")[1])
+            k = -(-1280 // w)
+            ms = cpu_ms(n)
+            share = 5 * ms / (30 * pose_ms)
+            label = f"{w} (default)" if w == int(counter(n, "default_width")) else str(w)
+            out.append(f"| {label} | {1280 // k}x{960 // k} | {ms:.2f} | {100 * share:.1f} % | "
+                       f"≤ 3 %: {'met' if share <= 0.03 else 'NOT met'} |")
     imp = [n for n in wall if n.startswith("BM_ImportBag")]
     if imp:
         n = imp[0]

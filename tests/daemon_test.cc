@@ -8,11 +8,14 @@
 #include <filesystem>
 #include <fstream>
 #include <kincal/controls_t.hpp>
+#include <kincal/markers_t.hpp>
 #include <kincal/params_t.hpp>
 #include <kincal/pose_t.hpp>
+#include <kincal/preview_t.hpp>
 #include <lcm/lcm-cpp.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
+#include <set>
 #include <thread>
 
 #include "daemon/daemon_test_util.h"
@@ -186,6 +189,42 @@ TEST(DaemonSim, ResumesAndExportsACheckpointWithAHeldParameter) {
       EXPECT_GT(e.covariance(2, 2), 0.0);
     }
     ExpectWithin3Sigma(e, truth);
+  }
+}
+
+// preview.enabled: the camera's picture at preview.rate_hz on LCM and in the log, each
+// naming the frame whose markers it shows.
+TEST(DaemonSim, PublishesAndRecordsThePreview) {
+  DaemonConfig c = SimConfig5Hz(6);
+  c.preview.enabled = true;
+  c.record.path = TempPath("preview.lcm");
+  {
+    Daemon d(c);
+    ASSERT_EQ(d.Run(), 0);
+  }
+  lcm::LogFile log(c.record.path, "r");
+  std::vector<kincal::preview_t> previews;
+  std::set<int64_t> marker_frames;
+  while (const lcm::LogEvent* ev = log.readNextEvent()) {
+    if (ev->channel == c.lcm.preview_channel) {
+      kincal::preview_t m;
+      ASSERT_EQ(m.decode(ev->data, 0, ev->datalen), ev->datalen);
+      previews.push_back(m);
+    } else if (ev->channel == c.lcm.markers_channel) {
+      kincal::markers_t m;
+      ASSERT_EQ(m.decode(ev->data, 0, ev->datalen), ev->datalen);
+      marker_frames.insert(m.frame_sequence);
+    }
+  }
+  // 6 s at 5 Hz (the simulated camera's 30 Hz stamps: every sixth frame).
+  EXPECT_NEAR(static_cast<double>(previews.size()), 30.0, 1.0);
+  for (const auto& p : previews) {
+    EXPECT_EQ(p.scale, 2);  // the default 640x480 camera, preview.width 320
+    EXPECT_EQ(p.width, 320);
+    EXPECT_EQ(p.height, 240);
+    EXPECT_EQ(p.format, "jpeg");
+    EXPECT_EQ(marker_frames.count(p.frame_sequence), 1u) << p.frame_sequence;
+    EXPECT_FALSE(cv::imdecode(p.data, cv::IMREAD_GRAYSCALE).empty());
   }
 }
 

@@ -37,6 +37,22 @@ Eigen::MatrixXd Sub(const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& i
   return out;
 }
 
+// Held parameters (robot.fixed: zero variance) keep this run's value; the free ones are
+// fused, and each must have been free in the resumed run too.
+bool FreeInBoth(const BatchCalibration& r, const Checkpoint& resumed,
+                std::vector<Eigen::Index>* free, std::string* why) {
+  for (Eigen::Index i = 0; i < r.covariance.rows(); ++i) {
+    if (r.covariance(i, i) <= 0.0) continue;
+    if (resumed.covariance(i, i) <= 0.0) {
+      *why = "the resumed calibration held " + r.params[static_cast<size_t>(i)].name +
+             ", which this run estimates";
+      return false;
+    }
+    free->push_back(i);
+  }
+  return true;
+}
+
 }  // namespace
 
 BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& resumed,
@@ -50,18 +66,8 @@ BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& r
     *why = "the resumed calibration has other parameters or effects";
     return r;
   }
-  // Held parameters (robot.fixed: zero variance) keep this run's value; the free ones are
-  // fused, and each must have been free in the resumed run too.
   std::vector<Eigen::Index> free;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    if (r.covariance(i, i) <= 0.0) continue;
-    if (resumed.covariance(i, i) <= 0.0) {
-      *why = "the resumed calibration held " + r.params[static_cast<size_t>(i)].name +
-             ", which this run estimates";
-      return r;
-    }
-    free.push_back(i);
-  }
+  if (!FreeInBoth(r, resumed, &free, why)) return r;
   const auto m = static_cast<Eigen::Index>(free.size());
   const Eigen::LDLT<Eigen::MatrixXd> pb(Sub(r.covariance, free)), pr(Sub(resumed.covariance, free));
   if (m == 0 || pb.info() != Eigen::Success || pr.info() != Eigen::Success || !pb.isPositive() ||

@@ -147,6 +147,7 @@ void LoadLcm(Section s, DaemonConfig& c) {
   s.Get("guidance_channel", &c.lcm.guidance_channel);
   s.Get("calibration_channel", &c.lcm.calibration_channel);
   s.Get("markers_channel", &c.lcm.markers_channel);
+  s.Get("preview_channel", &c.lcm.preview_channel);
   s.Get("frame_channel", &c.lcm.frame_channel);
   s.Get("publish_frames", &c.lcm.publish_frames);
   s.Get("publish_markers", &c.lcm.publish_markers);
@@ -296,6 +297,14 @@ void LoadCalibration(Section s, DaemonConfig& c) {
   s.CheckUnknown();
 }
 
+void LoadPreview(Section s, DaemonConfig& c) {
+  s.Get("enabled", &c.preview.enabled);
+  s.Get("rate_hz", &c.preview.rate_hz);
+  s.Get("width", &c.preview.width);
+  s.Get("quality", &c.preview.quality);
+  s.CheckUnknown();
+}
+
 void LoadGuidance(Section s, DaemonConfig& c) {
   s.Get("enabled", &c.guidance.enabled);
   s.Get("every_s", &c.guidance.every_s);
@@ -352,6 +361,7 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   LoadCheckpoint(top.Sub("checkpoint"), c);
   LoadCalibration(top.Sub("calibration"), c);
   LoadGuidance(top.Sub("guidance"), c);
+  LoadPreview(top.Sub("preview"), c);
   top.CheckUnknown();
   return c;
 }

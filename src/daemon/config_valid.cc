@@ -51,9 +51,9 @@ bool GuidanceFitsTheRobot(const DaemonConfig& c, std::string* error) {
 }  // namespace
 
 bool LcmOptions::IsValid(std::string* error) const {
-  for (const auto* ch :
-       {&controls_channel, &pose_channel, &params_channel, &health_channel, &model_check_channel,
-        &markers_channel, &frame_channel, &guidance_channel, &calibration_channel}) {
+  for (const auto* ch : {&controls_channel, &pose_channel, &params_channel, &health_channel,
+                         &model_check_channel, &markers_channel, &frame_channel, &guidance_channel,
+                         &calibration_channel, &preview_channel}) {
     if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
                 error)) {
       return false;
@@ -284,6 +284,12 @@ bool ValidEstimator(const DaemonConfig& c, std::string* error) {
 
 }  // namespace
 
+bool PreviewOptions::IsValid(std::string* error) const {
+  return Expect(rate_hz > 0 && rate_hz <= 30, "preview.rate_hz must be in (0, 30]", error) &&
+         Expect(width >= 32 && width <= 4096, "preview.width must be 32..4096 px", error) &&
+         Expect(quality >= 10 && quality <= 100, "preview.quality must be 10..100", error);
+}
+
 bool DaemonConfig::IsValid(std::string* error) const {
   if (!Expect(health_rate_hz > 0, "health_rate_hz must be > 0", error) ||
       !Expect(no_target_warn_s > 0, "no_target_warn_s must be > 0", error) || !lcm.IsValid(error)) {
@@ -293,7 +299,7 @@ bool DaemonConfig::IsValid(std::string* error) const {
     return false;
   }
   if (!queues.IsValid(error) || !record.IsValid(error) || !checkpoint.IsValid(error) ||
-      !calibration.IsValid(error) || !guidance.IsValid(error)) {
+      !calibration.IsValid(error) || !guidance.IsValid(error) || !preview.IsValid(error)) {
     return false;
   }
   return GuidanceFitsTheRobot(*this, error);

@@ -71,6 +71,7 @@ struct Daemon::Impl {
   ControlReceiver intake;
   std::unique_ptr<CaptureStage> capture;
   PoseStage pose_stage;
+  std::unique_ptr<PreviewStage> preview;  // preview.enabled
   DetectionStage detection;
 
   // The status of the last params_t published; a health message reports it. The lock
@@ -115,10 +116,13 @@ struct Daemon::Impl {
                            cfg.record.frame_encoding},
             &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })),
         pose_stage(cfg.pose, cfg.detector, vis),
+        preview(cfg.preview.enabled ? std::make_unique<PreviewStage>(
+                                          cfg.preview, cfg.lcm.preview_channel, &out, caps.lossless)
+                                    : nullptr),
         detection(&pose_stage,
                   DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,
                                    cfg.lcm.publish_markers, cfg.pose.sigma_px},
-                  &out, &frame_q, &pose_q, &counters) {
+                  &out, &frame_q, &pose_q, &counters, preview.get()) {
     if (cfg.guidance.enabled) {
       guidance = std::make_unique<Guidance>(cfg.guidance,
                                             [this](int64_t utime, const kincal::guidance_t& m) {
@@ -428,6 +432,11 @@ int Daemon::Run() {
   filter.join();
   lcm_thread.join();
   if (d.guidance) d.guidance->Drain();  // the last advice into the log
+  if (d.preview) {
+    d.preview->Drain();  // the last preview into the log
+    spdlog::info("kincald: preview: {} published, {} skipped (the preview worker was busy)",
+                 d.preview->published(), d.preview->skipped());
+  }
   d.source->Stop();
   d.PublishHealth(period.count());
   d.out.CloseLog();

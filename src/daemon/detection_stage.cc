@@ -10,13 +10,14 @@ namespace kincal::daemon {
 
 DetectionStage::DetectionStage(PoseStage* stage, DetectionOptions options, Publisher* publisher,
                                BoundedQueue<Frame>* in, BoundedQueue<PoseSample>* out,
-                               CounterSet* counters)
+                               CounterSet* counters, PreviewStage* preview)
     : stage_(*stage),
       opt_(std::move(options)),
       publisher_(*publisher),
       in_(*in),
       out_(*out),
-      counters_(*counters) {}
+      counters_(*counters),
+      preview_(preview) {}
 
 void DetectionStage::Run() {
   Frame f;
@@ -55,7 +56,9 @@ void DetectionStage::Run() {
       latency_total_.Add(ms);
       latency_window_.Add(ms);
     }
-    out_.Push(p);
+    const int64_t utime = p.utime;
+    out_.Push(p);  // swaps: p holds a recycled sample from here on
+    if (preview_ != nullptr) preview_->Offer(stage_.grey(), utime, f.sequence);
   }
   out_.Close();
 }

@@ -10,6 +10,7 @@
 #include "daemon/counters.h"
 #include "daemon/latency_histogram.h"
 #include "daemon/pose_stage.h"
+#include "daemon/preview.h"
 #include "daemon/publisher.h"
 
 namespace kincal::daemon {
@@ -22,8 +23,11 @@ struct DetectionOptions {
 
 class DetectionStage {
  public:
+  // `preview` (may be null: preview.enabled false) is offered every frame after its pose
+  // went out.
   DetectionStage(PoseStage* stage, DetectionOptions options, Publisher* publisher,
-                 BoundedQueue<Frame>* in, BoundedQueue<PoseSample>* out, CounterSet* counters);
+                 BoundedQueue<Frame>* in, BoundedQueue<PoseSample>* out, CounterSet* counters,
+                 PreviewStage* preview = nullptr);
 
   // Until the frame queue is closed and empty; then closes the pose queue.
   void Run();
@@ -45,6 +49,7 @@ class DetectionStage {
   BoundedQueue<Frame>& in_;
   BoundedQueue<PoseSample>& out_;
   CounterSet& counters_;
+  PreviewStage* const preview_;
   std::mutex mu_;  // guards what follows
   std::string last_frame_error_;
   LatencyHistogram latency_total_, latency_window_;

@@ -24,6 +24,8 @@ class PoseStage {
   // frame cannot be decoded or has the wrong size; a frame without the target gives a
   // pose with valid = false and returns true.
   bool Process(const Frame& f, PoseSample* out, std::string* error);
+  // The last frame processed, decoded to grey (the preview's source).
+  const cv::Mat& grey() const { return grey_; }
 
  private:
   void Solve(const std::vector<vision::Marker>& markers, PoseSample* p);

@@ -41,6 +41,7 @@ struct LcmOptions {
   std::string calibration_channel = "KINCAL_CALIBRATION";  // the batch tier's calibration_t
   std::string markers_channel = "KINCAL_MARKERS";
   std::string frame_channel = "KINCAL_FRAME";
+  std::string preview_channel = "KINCAL_PREVIEW";  // preview.enabled: downscaled JPEG frames
   bool publish_frames = false;  // frames go to the log; on the network only if asked
   bool publish_markers = true;
   bool IsValid(std::string* error) const;
@@ -203,6 +204,20 @@ struct CalibrationOptions {
   bool IsValid(std::string* error) const;
 };
 
+// What the camera sees, for people (kincal view, Foxglove): every 1/rate_hz of frame time
+// the detection thread's grey image, downscaled by the smallest whole factor that fits
+// `width` and JPEG-encoded at `quality` on a worker thread, as a kincal.preview_t on
+// lcm.preview_channel and in the recording. Off by default. The defaults (320 px: a
+// 1280x960 or 640x480 camera gives 320x240) cost about 2 % of the pose stage's CPU at
+// 1280x960 and 30 Hz; 480 (426 px) 3.6 %, 640 4.8 % (bench/RESULTS.md).
+struct PreviewOptions {
+  bool enabled = false;
+  double rate_hz = 5.0;
+  int width = 320;
+  int quality = 80;
+  bool IsValid(std::string* error) const;
+};
+
 // Online guidance: every every_s of data time the running estimate is handed to a worker
 // thread that answers what `kincal plan --advise` answers (kincal/plan/advice.h) and
 // publishes it as kincal.guidance_t on lcm.guidance_channel.
@@ -245,6 +260,7 @@ struct DaemonConfig {
   CheckpointOptions checkpoint;
   CalibrationOptions calibration;
   GuidanceOptions guidance;
+  PreviewOptions preview;
   double health_rate_hz = 1.0;
   double no_target_warn_s = 5.0;  // health is not ok after this long (frame time) without target
   // Every section, then what ties sections together; false with *error naming the
