@@ -17,6 +17,7 @@
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/ros2_control.h"
 #include "kincal/io/vesc.h"
+#include "python_scripts.h"
 
 namespace kincal::app {
 namespace {
@@ -96,6 +97,19 @@ Checkpoint ReadReportAsCheckpoint(const std::string& path) {
   return c;
 }
 
+namespace {
+
+// --format mcap: scripts/kincal_mcap.py (foxglove-sdk, from PyPI) in this process's place.
+[[noreturn]] void ExportMcap(const std::string& log, const std::string& out) {
+  if (log.empty() || out.empty()) {
+    throw std::runtime_error("--format mcap needs --log FILE (a kincald recording) and --out FILE");
+  }
+  ExecPythonScript("kincal_mcap.py", "KINCAL_MCAP_SCRIPT", {"--log", log, "--out", out},
+                   "foxglove-sdk and lcm");
+}
+
+}  // namespace
+
 Command AddExport(CLI::App& app) {
   struct Args {
     std::string checkpoint, log, report, channel = "KINCAL_PARAMS", out, format = "yaml";
@@ -108,8 +122,10 @@ Command AddExport(CLI::App& app) {
   ck->excludes(log)->excludes(rep);
   log->excludes(rep);
   app.add_option("--channel", a->channel, "params channel in the log")->capture_default_str();
-  app.add_option("--format", a->format, "yaml | ros2_control | vesc (F1TENTH's vesc.yaml)")
-      ->check(CLI::IsMember({"yaml", "ros2_control", "vesc"}))
+  app.add_option("--format", a->format,
+                 "yaml | ros2_control | vesc (F1TENTH's vesc.yaml) | mcap (--log as MCAP for "
+                 "Foxglove: frames, overlay, poses, every message)")
+      ->check(CLI::IsMember({"yaml", "ros2_control", "vesc", "mcap"}))
       ->capture_default_str();
   app.add_option("--nominal", a->nominal,
                  "ros2_control: your nominal wheel_radius=R,wheel_separation=D (kept; the "
@@ -119,6 +135,7 @@ Command AddExport(CLI::App& app) {
                  "ros2_control: the controller's name (default: its type's)");
   app.add_option("--out", a->out, "YAML file (default: standard output)");
   return [a]() -> int {
+    if (a->format == "mcap") ExportMcap(a->log, a->out);
     Checkpoint c;
     std::string source;
     if (!a->checkpoint.empty()) {

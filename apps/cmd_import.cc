@@ -1,13 +1,7 @@
 // kincal import: a ROS 1 or ROS 2 bag to a kincal LCM log. The work is done by
 // scripts/kincal_import.py (rosbags, from PyPI, keeps ROS out of the C++ core); this
 // command finds the script and the Python that has rosbags, and runs it in its place.
-#include <unistd.h>
-
-#include <cerrno>
-#include <cstring>
-#include <stdexcept>
 #include <string>
-#include <vector>
 
 #include "commands.h"
 #include "python_scripts.h"
@@ -22,17 +16,8 @@ Command AddImport(CLI::App& app) {
       "Runs scripts/kincal_import.py with the venv's Python; `kincal import --help` lists "
       "its options.");
   return [&app]() -> int {
-    std::vector<std::string> args = {PythonInterpreter(),
-                                     PythonScript("kincal_import.py", "KINCAL_IMPORT_SCRIPT")};
-    for (const auto& a : app.remaining()) args.push_back(a);
-    SetLcmTypesPath();
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execvp(argv[0], argv.data());
-    throw std::runtime_error("import: cannot run " + args[0] + " " + args[1] + ": " +
-                             std::strerror(errno) +
-                             " (set KINCAL_PYTHON to a Python with rosbags and lcm)");
+    ExecPythonScript("kincal_import.py", "KINCAL_IMPORT_SCRIPT", app.remaining(),
+                     "rosbags and lcm");
   };
 }
 

@@ -46,6 +46,8 @@ Command AddDetect(CLI::App& app);
 Command AddFloorcal(CLI::App& app);
 Command AddExport(CLI::App& app);
 Command AddImport(CLI::App& app);
+// kincal view: scripts/kincal_view.py in this process's place (cmd_view.cc).
+Command AddView(CLI::App& app);
 Command AddPlan(CLI::App& app);
 
 }  // namespace kincal::app

@@ -61,6 +61,9 @@ int main(int argc, char** argv) {
   commands[exp] = kincal::app::AddExport(*exp);
   auto* imp = app.add_subcommand("import", "a ROS 1 or ROS 2 bag to a kincal LCM log (rosbags)");
   commands[imp] = kincal::app::AddImport(*imp);
+  auto* view =
+      app.add_subcommand("view", "what kincald sees, live or from a recording, in the browser");
+  commands[view] = kincal::app::AddView(*view);
   auto* plan = app.add_subcommand("plan", "how to drive a robot to calibrate it fastest");
   commands[plan] = kincal::app::AddPlan(*plan);
   try {

@@ -62,6 +62,8 @@ void AddOptions(CLI::App* app, std::string* config, kincal::daemon::CommandLineO
   app->add_flag("--record-png", o->record_png, "store recorded frames as PNG instead of raw");
   app->add_flag("--publish-frames", o->publish_frames,
                 "also publish frames on LCM (default: log only)");
+  app->add_flag("--preview", o->preview,
+                "publish the camera's picture on KINCAL_PREVIEW (preview.*; for kincal view)");
   app->add_option("--lcm-url", o->lcm_url,
                   "LCM provider URL, e.g. udpm://239.255.76.67:7667?ttl=0 or memq://");
   app->add_option("--resume", o->resume, "start from this checkpoint (JSON)");

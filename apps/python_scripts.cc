@@ -2,11 +2,13 @@
 
 #include <spawn.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
 
 extern char** environ;
 
@@ -45,6 +47,19 @@ void SetLcmTypesPath() {
   if (!FromEnv("KINCAL_LCM_TYPES").empty()) return;
   const fs::path types = fs::path(KINCAL_BINARY_DIR) / "lcmgen" / "python";
   if (fs::exists(types)) ::setenv("KINCAL_LCM_TYPES", types.c_str(), 1);
+}
+
+void ExecPythonScript(const std::string& name, const char* env,
+                      const std::vector<std::string>& args, const std::string& needs) {
+  std::vector<std::string> all = {PythonInterpreter(), PythonScript(name, env)};
+  all.insert(all.end(), args.begin(), args.end());
+  SetLcmTypesPath();
+  std::vector<char*> argv;
+  for (auto& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  ::execvp(argv[0], argv.data());
+  throw std::runtime_error("cannot run " + all[0] + " " + all[1] + ": " + std::strerror(errno) +
+                           " (set KINCAL_PYTHON to a Python with " + needs + ")");
 }
 
 std::string RunAndWait(const std::vector<std::string>& args) {

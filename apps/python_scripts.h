@@ -14,6 +14,11 @@ std::string PythonInterpreter();
 std::string PythonScript(const std::string& name, const char* env);
 // Points KINCAL_LCM_TYPES at the build tree's generated Python types when unset.
 void SetLcmTypesPath();
+// Runs scripts/NAME (PythonScript(name, env)) with the venv's Python and `args` in this
+// process's place (the LCM types' path set); returns only to throw an error naming the
+// command and `needs` (what the Python must have).
+[[noreturn]] void ExecPythonScript(const std::string& name, const char* env,
+                                   const std::vector<std::string>& args, const std::string& needs);
 // Runs `args` (args[0] found on PATH) and waits; an error names the program and its exit.
 std::string RunAndWait(const std::vector<std::string>& args);
 

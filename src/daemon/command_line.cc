@@ -41,6 +41,22 @@ Status ApplyEffects(const std::string& text, RobotOptions* robot) {
   return {};
 }
 
+// What kincald writes and publishes, and the checkpoint it starts from.
+void ApplyOutputs(const CommandLineOptions& o, DaemonConfig* c) {
+  if (!o.record.empty()) c->record.path = o.record;
+  if (o.record_png) c->record.frame_encoding = FrameEncoding::kPng;
+  if (o.publish_frames) c->lcm.publish_frames = true;
+  if (o.preview) c->preview.enabled = true;
+  if (!o.lcm_url.empty()) c->lcm.url = o.lcm_url;
+  if (!o.resume.empty()) c->checkpoint.resume = o.resume;
+  if (!o.checkpoint.empty()) c->checkpoint.path = o.checkpoint;
+  std::error_code ec;
+  if (o.resume_if_present && !c->checkpoint.path.empty() &&
+      std::filesystem::exists(c->checkpoint.path, ec)) {
+    c->checkpoint.resume = c->checkpoint.path;
+  }
+}
+
 }  // namespace
 
 Status ApplyCommandLine(const CommandLineOptions& o, DaemonConfig* c) {
@@ -60,17 +76,7 @@ Status ApplyCommandLine(const CommandLineOptions& o, DaemonConfig* c) {
     if (Status s = ApplyEffects(o.effects, &c->robot); !s.ok()) return s;
   }
   if (o.loops > 1) c->replay.loops = o.loops;
-  if (!o.record.empty()) c->record.path = o.record;
-  if (o.record_png) c->record.frame_encoding = FrameEncoding::kPng;
-  if (o.publish_frames) c->lcm.publish_frames = true;
-  if (!o.lcm_url.empty()) c->lcm.url = o.lcm_url;
-  if (!o.resume.empty()) c->checkpoint.resume = o.resume;
-  if (!o.checkpoint.empty()) c->checkpoint.path = o.checkpoint;
-  std::error_code ec;
-  if (o.resume_if_present && !c->checkpoint.path.empty() &&
-      std::filesystem::exists(c->checkpoint.path, ec)) {
-    c->checkpoint.resume = c->checkpoint.path;
-  }
+  ApplyOutputs(o, c);
   return {};
 }
 

@@ -81,6 +81,7 @@ TEST(CommandLine, OutputsAndCheckpoints) {
   o.record = "out.lcm";
   o.record_png = true;
   o.publish_frames = true;
+  o.preview = true;
   o.lcm_url = "memq://";
   o.checkpoint = ck;
   o.resume_if_present = true;
@@ -88,6 +89,7 @@ TEST(CommandLine, OutputsAndCheckpoints) {
   EXPECT_EQ(c.record.path, "out.lcm");
   EXPECT_EQ(c.record.frame_encoding, FrameEncoding::kPng);
   EXPECT_TRUE(c.lcm.publish_frames);
+  EXPECT_TRUE(c.preview.enabled);
   EXPECT_EQ(c.lcm.url, "memq://");
   EXPECT_EQ(c.checkpoint.path, ck);
   EXPECT_TRUE(c.checkpoint.resume.empty()) << "no checkpoint yet: a fresh start";

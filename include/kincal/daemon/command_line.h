@@ -23,6 +23,7 @@ struct CommandLineOptions {
   std::string record;              // --record: LCM log of everything
   bool record_png = false;         // --record-png
   bool publish_frames = false;     // --publish-frames
+  bool preview = false;            // --preview: preview.enabled
   std::string lcm_url;             // --lcm-url
   std::string resume;              // --resume: start from this checkpoint
   std::string checkpoint;          // --checkpoint: write checkpoints here

@@ -1,0 +1,288 @@
+#!/usr/bin/env python3
+"""kincal export --format mcap: a kincald recording (LCM log) as MCAP for Foxglove.
+
+`kincal export --format mcap --log RUN.lcm --out RUN.mcap` runs this program with the
+venv's Python (foxglove-sdk writes the MCAP with Foxglove's well-known schemas). Every
+event of the log becomes one message on the topic "/" + its LCM channel, stamped with the
+event's time (log time) and the message's utime (the schema's timestamp):
+
+  kincal.preview_t   -> foxglove.CompressedImage (jpeg)
+  kincal.frame_t     -> foxglove.CompressedImage (MJPG: jpeg, PNG: png) or RawImage (GREY:
+                        mono8, YUYV: yuyv, BGR3: bgr8, RGB3: rgb8)
+  kincal.markers_t   -> foxglove.ImageAnnotations in the camera's pixels: identified markers
+                        green, unassigned blobs red, the target's outline (the identified
+                        markers' convex hull) and its id
+  kincal.pose_t      -> foxglove.PoseInFrame (frame "floor"; invalid poses: JSON beside)
+  everything else    -> JSON (params, calibration, model check, health, guidance, controls,
+                        runs), one object per message with the LCM type's fields
+
+and, derived: "/<markers channel>/preview" (the same annotations on the preview's pixels,
+for the frame the preview shows) and "/tf" (foxglove.FrameTransform floor -> robot, one per
+valid pose). Channels are recognised by their LCM type, whatever their names.
+
+The MCAP is written to a temporary file beside --out and renamed over it (never through a
+symbolic link); an input that is not a kincal recording, or a damaged one, is a named
+error and nothing is written.
+"""
+
+import argparse
+import json
+import math
+import os
+import sys
+import tempfile
+
+from kincal_lcm_log import LogError, read_events_at
+from kincal_lcm_types import use_lcm_types
+
+# Colours of the overlay (RGBA in 0..1), as `kincal view` draws them.
+IDENTIFIED = (0.1, 0.85, 0.2, 1.0)
+UNASSIGNED = (0.95, 0.2, 0.2, 1.0)
+OUTLINE = (0.2, 0.6, 1.0, 1.0)
+# Markers kept for the preview's annotations: the preview names a frame a few frames back.
+MARKERS_KEPT = 64
+
+
+class ExportError(Exception):
+    pass
+
+
+def fields(msg):
+    """An LCM message as a dict of plain values (bytes as their length)."""
+    out = {}
+    for name in msg.__slots__:
+        v = getattr(msg, name)
+        if isinstance(v, (bytes, bytearray)):
+            out[name + "_bytes"] = len(v)
+        elif isinstance(v, (list, tuple)):
+            out[name] = [list(x) if isinstance(x, (list, tuple)) else x for x in v]
+        else:
+            out[name] = v
+    return out
+
+
+def timestamp(utime):
+    from foxglove.messages import Timestamp
+    utime = max(int(utime), 0)
+    return Timestamp(sec=utime // 1_000_000, nsec=(utime % 1_000_000) * 1000)
+
+
+def convex_hull(points):
+    """Andrew's monotone chain; counter-clockwise, no repeated end point."""
+    pts = sorted(set(points))
+    if len(pts) < 3:
+        return pts
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+def color(rgba):
+    from foxglove.messages import Color
+    return Color(r=float(rgba[0]), g=float(rgba[1]), b=float(rgba[2]), a=float(rgba[3]))
+
+
+def annotations(m, scale=1):
+    """markers_t as ImageAnnotations on an image `scale` times smaller than the camera's.
+    Foxglove's pixel origin is the top-left pixel's corner: the centre of pixel u is u + 0.5."""
+    from foxglove.messages import (CircleAnnotation, ImageAnnotations, Point2,
+                                   PointsAnnotation, PointsAnnotationType, TextAnnotation)
+    ts = timestamp(m.utime)
+    circles, ident = [], []
+    for i in range(m.num_markers):
+        x, y = (m.u[i] + 0.5) / scale, (m.v[i] + 0.5) / scale
+        ok = m.id[i] >= 0
+        if ok:
+            ident.append((x, y))
+        circles.append(CircleAnnotation(timestamp=ts, position=Point2(x=x, y=y), diameter=12.0,
+                                        thickness=2.0, fill_color=color((0, 0, 0, 0)),
+                                        outline_color=color(IDENTIFIED if ok else UNASSIGNED)))
+    points, texts = [], []
+    hull = convex_hull(ident)
+    if len(hull) >= 3:
+        points.append(PointsAnnotation(timestamp=ts, type=PointsAnnotationType.LineLoop,
+                                       points=[Point2(x=x, y=y) for x, y in hull],
+                                       outline_color=color(OUTLINE),
+                                       thickness=2.0))
+        cx = sum(p[0] for p in hull) / len(hull)
+        cy = min(p[1] for p in hull) - 8.0
+        target = next((m.target_id[i] for i in range(m.num_markers) if m.id[i] >= 0), -1)
+        texts.append(TextAnnotation(timestamp=ts, position=Point2(x=cx, y=cy), text=f"target {target}",
+                                    font_size=12.0, text_color=color(OUTLINE),
+                                    background_color=color((0, 0, 0, 0.5))))
+    return ImageAnnotations(circles=circles, points=points, texts=texts)
+
+
+def quaternion(theta):
+    from foxglove.messages import Quaternion
+    return Quaternion(x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2))
+
+
+class Exporter:
+    """One pass over the log; channels made on first use."""
+
+    def __init__(self, context):
+        import kincal as k
+        self.context = context
+        self.types = {}
+        for name in ("preview_t", "frame_t", "markers_t", "pose_t", "params_t", "calibration_t",
+                     "model_check_t", "health_t", "guidance_t", "controls_t", "run_t"):
+            cls = getattr(k, name, None)
+            if cls is not None:
+                self.types[cls._get_packed_fingerprint()] = cls
+        self.channels = {}
+        self.counts = {}
+        self.markers = {}  # frame_sequence -> markers_t (the last MARKERS_KEPT)
+        self.markers_channel = None
+
+    def channel(self, topic, kind, type_name=None):
+        if topic in self.channels:
+            return self.channels[topic]
+        import foxglove
+        from foxglove import channels as fc
+        if kind == "json":
+            schema = foxglove.Schema(name=type_name, encoding="jsonschema",
+                                     data=json.dumps({"type": "object", "title": type_name}).encode())
+            ch = foxglove.Channel(topic, schema=schema, message_encoding="json", context=self.context)
+        else:
+            ch = getattr(fc, kind + "Channel")(topic, context=self.context)
+        self.channels[topic] = ch
+        return ch
+
+    def log(self, topic, kind, msg, log_time, type_name=None):
+        self.channel(topic, kind, type_name).log(msg, log_time=log_time)
+        self.counts[topic] = self.counts.get(topic, 0) + 1
+
+    def event(self, channel, data, log_time):
+        cls = self.types.get(bytes(data[:8]))
+        if cls is None:
+            raise ExportError(f"channel {channel!r}: not a kincal message (unknown LCM type)")
+        try:
+            m = cls.decode(data)
+        except Exception as e:  # the generated decoder's errors are ValueError or struct.error
+            raise ExportError(f"channel {channel!r}: a {cls.__name__} that does not decode: {e}") from e
+        getattr(self, "on_" + cls.__name__, self.on_json)(channel, m, log_time)
+
+    def on_json(self, channel, m, log_time):
+        name = "kincal." + type(m).__name__
+        self.log("/" + channel, "json", fields(m), log_time, name)
+
+    def on_preview_t(self, channel, m, log_time):
+        from foxglove.messages import CompressedImage
+        self.log("/" + channel, "CompressedImage",
+                 CompressedImage(timestamp=timestamp(m.utime), frame_id="camera", data=bytes(m.data),
+                                 format=m.format), log_time)
+        mk = self.markers.get(m.frame_sequence)
+        if mk is not None and self.markers_channel is not None:
+            self.log("/" + self.markers_channel + "/preview", "ImageAnnotations",
+                     annotations(mk, max(m.scale, 1)), log_time)
+
+    def on_frame_t(self, channel, m, log_time):
+        from foxglove.messages import CompressedImage, RawImage
+        fmt = m.pixel_format
+        if fmt in ("MJPG", "PNG"):
+            self.log("/" + channel, "CompressedImage",
+                     CompressedImage(timestamp=timestamp(m.utime), frame_id="camera", data=bytes(m.data),
+                                     format="jpeg" if fmt == "MJPG" else "png"), log_time)
+            return
+        enc = {"GREY": "mono8", "YUYV": "yuyv", "BGR3": "bgr8", "RGB3": "rgb8"}.get(fmt)
+        if enc is None:
+            raise ExportError(f"channel {channel!r}: frame format {fmt!r} has no Foxglove image encoding")
+        self.log("/" + channel, "RawImage",
+                 RawImage(timestamp=timestamp(m.utime), frame_id="camera", width=m.width, height=m.height,
+                          encoding=enc, step=m.stride, data=bytes(m.data)), log_time)
+
+    def on_markers_t(self, channel, m, log_time):
+        self.markers_channel = channel
+        self.markers[m.frame_sequence] = m
+        if len(self.markers) > MARKERS_KEPT:
+            self.markers.pop(next(iter(self.markers)))
+        self.log("/" + channel, "ImageAnnotations", annotations(m), log_time)
+
+    def on_pose_t(self, channel, m, log_time):
+        from foxglove.messages import FrameTransform, Pose, PoseInFrame, Vector3
+        if not m.valid:
+            self.log("/" + channel + "/invalid", "json", fields(m), log_time, "kincal.pose_t")
+            return
+        ts = timestamp(m.utime)
+        self.log("/" + channel, "PoseInFrame",
+                 PoseInFrame(timestamp=ts, frame_id="floor",
+                             pose=Pose(position=Vector3(x=m.x, y=m.y, z=0.0), orientation=quaternion(m.theta))),
+                 log_time)
+        self.log("/tf", "FrameTransform",
+                 FrameTransform(timestamp=ts, parent_frame_id="floor", child_frame_id="robot",
+                                translation=Vector3(x=m.x, y=m.y, z=0.0), rotation=quaternion(m.theta)),
+                 log_time)
+
+
+def read_events(path):
+    """(channel, data, log time in ns) of every event; a damaged log is an ExportError."""
+    try:
+        for channel, data, utime, _ in read_events_at(path):
+            yield channel, data, utime * 1000
+    except LogError as e:
+        raise ExportError(str(e)) from e
+
+
+def export(log_path, out_path, types=None):
+    """Writes out_path from log_path; returns {topic: messages}."""
+    if not use_lcm_types(types):
+        raise ExportError("kincal's LCM Python types were not found (set KINCAL_LCM_TYPES)")
+    import foxglove
+    if not os.path.isfile(log_path):
+        raise ExportError(f"{log_path}: no such file")
+    if os.path.islink(out_path):
+        raise ExportError(f"{out_path}: is a symbolic link; not written through it")
+    out_dir = os.path.dirname(os.path.abspath(out_path))
+    fd, tmp = tempfile.mkstemp(prefix=".kincal_mcap_", suffix=".tmp", dir=out_dir)
+    os.close(fd)
+    os.unlink(tmp)  # open_mcap creates it (refusing to overwrite)
+    context = foxglove.Context()
+    try:
+        writer = foxglove.open_mcap(tmp, context=context)
+        exporter = Exporter(context)
+        try:
+            for channel, data, t in read_events(log_path):
+                exporter.event(channel, data, t)
+        finally:
+            writer.close()
+        os.replace(tmp, out_path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return exporter.counts
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="kincal export --format mcap",
+                                 description="A kincald recording (LCM log) as MCAP for Foxglove.")
+    ap.add_argument("--log", required=True, help="kincald's LCM log")
+    ap.add_argument("--out", required=True, help="the MCAP file to write")
+    ap.add_argument("--lcm-types", help="folder holding the kincal LCM Python package")
+    a = ap.parse_args(argv)
+    try:
+        counts = export(a.log, a.out, a.lcm_types)
+    except ExportError as e:
+        print(f"kincal export: error: {e}", file=sys.stderr)
+        return 1
+    total = sum(counts.values())
+    print(f"wrote {a.out}: {total} messages on {len(counts)} topics")
+    for topic in sorted(counts):
+        print(f"  {topic}: {counts[topic]}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
