@@ -9,6 +9,8 @@ otherwise) or by a recording (`--log FILE`, with play/pause and a time slider):
   * the latest camera picture (KINCAL_PREVIEW: `kincald --preview`, or a recording's
     frames) with every detected marker (identified: green, unassigned blobs: red), the
     identified target's outline and id, and its recent track in the picture;
+  * a map of the floor: the part the camera sees (preview_t's polygon, from kincald's
+    camera and floor calibration), the target's track and its pose with its axes;
   * the parameters against time with +-2 sigma (and the truth with `--truth`), the status,
     the model check's verdict with its suspected effect and evidence, health (frame rate,
     drops, gated poses, latency, resets) and the guidance's advice;
@@ -48,6 +50,8 @@ ACK_TIMEOUT_S = 5.0     # a page that has not taken a state for this long gets t
 HISTORY_EVERY_S = 0.5   # the charts' history goes to a page this often (the rest: the newest)
 TRACK_LEN = 90          # the target's recent track in the picture, in frames
 MARKERS_KEPT = 64       # markers kept by frame sequence, for the picture that names them
+POSES_KEPT = 3000       # the target's track on the floor map (live: the newest)
+FLOOR_POINTS = 600      # points of that track sent to a page
 STATUS_NAMES = ["initializing", "converging", "converged", "diverged", "model inadequate"]
 
 
@@ -106,6 +110,8 @@ class Timeline:
         self.previews = collections.deque()   # (utime, preview dict) or (utime, ("offset", ...))
         self.markers = collections.OrderedDict()
         self.track = collections.deque()      # (utime, [u, v]) target centres in the picture
+        self.poses = collections.deque()      # (utime, [x, y, theta]) valid poses on the floor
+        self.floor_seen = None                # the floor polygon the camera sees (preview_t)
         self.params = collections.deque()     # (utime, {names, values, sigmas, status, source})
         self.latest = {}                      # kind -> deque of (utime, dict)
         self.errors = {}                      # channel -> "what", count
@@ -154,6 +160,8 @@ class Timeline:
                        "received_utime": int(time.time() * 1e6)}
         item.update({"utime": m.utime, "frame_sequence": m.frame_sequence, "scale": max(m.scale, 1), "width": m.width,
                      "height": m.height, "source_width": m.source_width, "source_height": m.source_height})
+        if m.num_floor:
+            self.floor_seen = [[x, y] for x, y in zip(m.floor_x, m.floor_y)]
         self.previews.append((utime, item))
         self._trim(self.previews, utime)
         if self.history_us is not None:
@@ -178,6 +186,15 @@ class Timeline:
             if self.history_us is not None:
                 while len(self.track) > TRACK_LEN:
                     self.track.popleft()
+
+    def _on_pose_t(self, m, utime, _):
+        if not m.valid:
+            return
+        self.poses.append((utime, [m.x, m.y, m.theta]))
+        self._trim(self.poses, utime)
+        if self.history_us is not None:
+            while len(self.poses) > POSES_KEPT:
+                self.poses.popleft()
 
     def _on_params_t(self, m, utime, _):
         self.params.append((utime, {"names": list(m.names), "units": list(m.units), "values": list(m.values),
@@ -226,6 +243,10 @@ class Timeline:
                 found = self.markers.get(preview["frame_sequence"])
                 markers = found[1] if found else None
             track = [c for u, c in self.track if t is None or u <= t][-TRACK_LEN:]
+            poses = [c for u, c in self.poses if t is None or u <= t][-POSES_KEPT:]
+            floor_track = poses[::max(1, len(poses) // FLOOR_POINTS)]
+            if poses and (not floor_track or floor_track[-1] is not poses[-1]):
+                floor_track.append(poses[-1])
             params = [(u, p) for u, p in self.params if t is None or u <= t]
             step = max(1, len(params) // max_points)
             history = params[::step]
@@ -233,6 +254,7 @@ class Timeline:
                 history.append(params[-1])
             return {
                 "preview": preview, "markers": markers, "track": track,
+                "floor": {"seen": self.floor_seen, "track": floor_track, "pose": poses[-1] if poses else None},
                 "params": [{"t": (u - (self.first_utime or u)) * 1e-6, **p} for u, p in history],
                 "latest_params": params[-1][1] if params else None,
                 "model_check": self._at(self.latest.get("model_check"), t),

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <kincal/controls_t.hpp>
@@ -226,6 +227,13 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
     EXPECT_EQ(marker_frames.count(p.frame_sequence), 1u) << p.frame_sequence;
     EXPECT_FALSE(cv::imdecode(p.data, cv::IMREAD_GRAYSCALE).empty());
   }
+  // The floor the camera sees, on the target's plane: the default camera (640 px across at
+  // f = 500 px) 2 m above the floor, the markers 0.10 m up.
+  ASSERT_FALSE(previews.empty());
+  const auto& f = previews.front();
+  ASSERT_EQ(f.num_floor, 32);
+  const auto [x_min, x_max] = std::minmax_element(f.floor_x.begin(), f.floor_x.end());
+  EXPECT_NEAR(*x_max - *x_min, 640.0 / 500.0 * (2.0 - 0.10), 1e-6);
 }
 
 // Reproduces issue 16 (items 5 and 7): two daemons recording to one path both exited 0 and

@@ -49,6 +49,7 @@ function render(s) {
     s.mode === "log" ? "recording" : "live (LCM)";
   renderHeard(s);
   renderPicture(s);
+  renderFloor(s.floor);
   renderEstimate(s);
   renderModelCheck(s.model_check);
   renderHealth(s.health);
@@ -157,6 +158,46 @@ function drawOverlay(p, markers, track) {
   }
   window.kincalView.drawnMarkers = drawn;
   window.kincalView.drawnFrame = p.frame_sequence;
+}
+
+// The floor map: what the camera sees, the track, the target's pose with its axes. Floor
+// x right, y up; fitted to the polygon and the track with a margin.
+function renderFloor(f) {
+  const c = document.getElementById("floor");
+  const g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  if (!f) return;
+  const pts = (f.seen || []).concat((f.track || []).map((p) => [p[0], p[1]]));
+  if (!pts.length) {
+    g.fillStyle = "#888";
+    g.fillText("no floor polygon or pose yet", 10, 20);
+    return;
+  }
+  let x0 = Math.min(...pts.map((p) => p[0])), x1 = Math.max(...pts.map((p) => p[0]));
+  let y0 = Math.min(...pts.map((p) => p[1])), y1 = Math.max(...pts.map((p) => p[1]));
+  const span = Math.max(x1 - x0, y1 - y0, 0.2);
+  const k = 0.9 * Math.min(c.width / Math.max(x1 - x0, span * 0.3), c.height / Math.max(y1 - y0, span * 0.3));
+  const cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+  const px = (x, y) => [c.width / 2 + k * (x - cx), c.height / 2 - k * (y - cy)];
+  const line = (list, colour, close) => {
+    g.strokeStyle = colour;
+    g.beginPath();
+    list.forEach((p, i) => { const [u, v] = px(p[0], p[1]); if (i === 0) g.moveTo(u, v); else g.lineTo(u, v); });
+    if (close) g.closePath();
+    g.stroke();
+  };
+  g.lineWidth = 1.5;
+  if (f.seen && f.seen.length >= 3) line(f.seen, "#7fa7c9", true);
+  if (f.track && f.track.length > 1) line(f.track, "#ffcc00", false);
+  if (f.pose) {
+    const [x, y, th] = f.pose;
+    const a = 0.15 * span;
+    line([[x, y], [x + a * Math.cos(th), y + a * Math.sin(th)]], "#ff6e6e", false);
+    line([[x, y], [x - a * Math.sin(th), y + a * Math.cos(th)]], "#6eff8a", false);
+  }
+  g.fillStyle = "#888";
+  g.fillText(`${fmt(span, 2)} m across`, 6, c.height - 6);
+  window.kincalView.floorDrawn = { seen: (f.seen || []).length, track: (f.track || []).length, pose: f.pose };
 }
 
 function renderEstimate(s) {

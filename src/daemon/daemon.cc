@@ -30,6 +30,7 @@
 #include "daemon/sources.h"
 #include "kincal/sim/scenario.h"
 #include "kincal/system.h"
+#include "kincal/vision/floor_view.h"
 
 namespace kincal::daemon {
 namespace {
@@ -116,9 +117,11 @@ struct Daemon::Impl {
                            cfg.record.frame_encoding},
             &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })),
         pose_stage(cfg.pose, cfg.detector, vis),
-        preview(cfg.preview.enabled ? std::make_unique<PreviewStage>(
-                                          cfg.preview, cfg.lcm.preview_channel, &out, caps.lossless)
-                                    : nullptr),
+        preview(cfg.preview.enabled
+                    ? std::make_unique<PreviewStage>(
+                          cfg.preview, cfg.lcm.preview_channel, &out, caps.lossless,
+                          vision::FloorSeen(vis.camera, vis.floor, vis.target_height_m))
+                    : nullptr),
         detection(&pose_stage,
                   DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,
                                    cfg.lcm.publish_markers, cfg.pose.sigma_px},

@@ -44,7 +44,7 @@ int PreviewStage::Scale(int source_width, int width) {
 }
 
 PreviewStage::PreviewStage(const PreviewOptions& options, std::string channel, Publisher* publisher,
-                           bool lossless)
+                           bool lossless, const std::vector<Eigen::Vector2d>& floor_seen)
     : opt_(options),
       channel_(std::move(channel)),
       publisher_(*publisher),
@@ -52,6 +52,11 @@ PreviewStage::PreviewStage(const PreviewOptions& options, std::string channel, P
       period_us_(static_cast<int64_t>(std::llround(1e6 / options.rate_hz))) {
   msg_.schema_version = 1;
   msg_.format = "jpeg";
+  msg_.num_floor = static_cast<int32_t>(floor_seen.size());
+  for (const auto& p : floor_seen) {
+    msg_.floor_x.push_back(p.x());
+    msg_.floor_y.push_back(p.y());
+  }
   thread_ = std::thread([this] { Loop(); });
 }
 

@@ -10,6 +10,7 @@
 // previews are the same every time.
 #pragma once
 
+#include <Eigen/Core>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
@@ -27,8 +28,9 @@ namespace kincal::daemon {
 
 class PreviewStage {
  public:
+  // `floor_seen`: the floor polygon every preview carries (vision/floor_view.h).
   PreviewStage(const PreviewOptions& options, std::string channel, Publisher* publisher,
-               bool lossless = false);
+               bool lossless = false, const std::vector<Eigen::Vector2d>& floor_seen = {});
   ~PreviewStage();  // stops the worker
   PreviewStage(const PreviewStage&) = delete;
   PreviewStage& operator=(const PreviewStage&) = delete;

@@ -44,6 +44,17 @@ void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& e
   }
 }
 
+bool FindParameter(const Checkpoint& c, const std::string& name, double* value, double* sigma) {
+  for (size_t i = 0; i < c.names.size(); ++i) {
+    if (c.names[i] != name) continue;
+    const auto k = static_cast<Eigen::Index>(i);
+    *value = c.values[i];
+    *sigma = std::sqrt(std::max(0.0, c.covariance(k, k)));
+    return true;
+  }
+  return false;
+}
+
 void MarkHeld(const std::vector<std::string>& names, Checkpoint* c) {
   c->held.clear();
   for (size_t i = 0; i < c->names.size(); ++i) {

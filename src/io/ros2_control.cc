@@ -28,14 +28,7 @@ struct Param {
 };
 
 bool Find(const Checkpoint& c, const std::string& name, Param* p) {
-  for (size_t i = 0; i < c.names.size(); ++i) {
-    if (c.names[i] != name) continue;
-    const int k = static_cast<int>(i);
-    p->value = c.values[i];
-    p->sigma = std::sqrt(std::max(0.0, c.covariance(k, k)));
-    return true;
-  }
-  return false;
+  return FindParameter(c, name, &p->value, &p->sigma);
 }
 
 std::string Num(double v, int digits = 6) {

@@ -9,18 +9,6 @@ namespace {
 constexpr const char* kKeys[] = {"speed_to_erpm_gain", "steering_angle_to_servo_gain",
                                  "steering_angle_to_servo_offset"};
 
-// A parameter's value and sigma by name; false when the estimate lacks it.
-bool Find(const Checkpoint& c, const std::string& name, double* value, double* sigma) {
-  for (size_t i = 0; i < c.names.size(); ++i) {
-    if (c.names[i] != name) continue;
-    const int k = static_cast<int>(i);
-    *value = c.values[i];
-    *sigma = std::sqrt(std::max(0.0, c.covariance(k, k)));
-    return true;
-  }
-  return false;
-}
-
 }  // namespace
 
 Status WriteVescYaml(std::ostream& out, const Checkpoint& c, const std::string& source,
@@ -39,8 +27,8 @@ Status WriteVescYaml(std::ostream& out, const Checkpoint& c, const std::string& 
     }
   }
   double kv = 0, kv_s = 0, ks = 0, ks_s = 0, off = 0, off_s = 0;
-  if (!Find(c, "k_v", &kv, &kv_s) || !Find(c, "k_steer", &ks, &ks_s) ||
-      !Find(c, "steer_offset", &off, &off_s)) {
+  if (!FindParameter(c, "k_v", &kv, &kv_s) || !FindParameter(c, "k_steer", &ks, &ks_s) ||
+      !FindParameter(c, "steer_offset", &off, &off_s)) {
     return Status::Error("--format vesc: the estimate lacks k_v, k_steer or steer_offset");
   }
   if (!(std::abs(kv) > 1e-6) || !(std::abs(ks) > 1e-6)) {

@@ -109,6 +109,17 @@ TEST(Checkpoint, AHeldParameterHasNoVarianceAndRoundTrips) {
   EXPECT_NE(Refusal(bad).find("variance of 'd'"), std::string::npos) << Refusal(bad);
 }
 
+TEST(Checkpoint, FindsAParameterByName) {
+  Checkpoint c = Good();
+  c.covariance(1, 1) = 4e-8;
+  double value = 0, sigma = 0;
+  ASSERT_TRUE(FindParameter(c, "r_r", &value, &sigma));
+  EXPECT_EQ(value, 0.0313);
+  EXPECT_DOUBLE_EQ(sigma, 2e-4);
+  EXPECT_FALSE(FindParameter(c, "wheelbase", &value, &sigma));
+  EXPECT_EQ(value, 0.0313);  // untouched
+}
+
 TEST(Checkpoint, AMissingFileIsAStatusWithErrnoText) {
   const StatusOr<Checkpoint> r = ReadCheckpoint(TempPath("no_such_checkpoint.json"));
   ASSERT_FALSE(r.ok());

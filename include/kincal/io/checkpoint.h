@@ -41,6 +41,9 @@ struct Checkpoint {
 void FillCheckpoint(const kincal::params_t& m, const std::vector<std::string>& effects,
                     Checkpoint* c);
 
+// A parameter's value and sigma by name; false when the estimate lacks it.
+bool FindParameter(const Checkpoint& c, const std::string& name, double* value, double* sigma);
+
 // Marks these parameters held (names not in the checkpoint are ignored): listed in
 // c->held, their covariance rows and columns set to zero.
 void MarkHeld(const std::vector<std::string>& names, Checkpoint* c);

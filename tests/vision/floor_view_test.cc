@@ -1,0 +1,66 @@
+// The floor a camera sees: a nadir camera's rectangle from its field of view by hand, the
+// target plane's height shrinking it, and a camera looking above the horizon seeing less.
+#include "kincal/vision/floor_view.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace kincal::vision {
+namespace {
+
+CameraModel Camera640() {
+  CameraModel c;
+  c.width = 640;
+  c.height = 480;
+  c.fx = c.fy = 500.0;
+  c.cx = 319.5;
+  c.cy = 239.5;
+  return c;
+}
+
+// Straight down from `h` m above the floor (camera x along floor x, y along -y).
+FloorExtrinsics Nadir(double h) {
+  FloorExtrinsics f;
+  f.R_cf = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  f.t_cf = Eigen::Vector3d(0.0, 0.0, h);
+  return f;
+}
+
+TEST(FloorView, ANadirCameraSeesItsFieldOfViewTimesItsHeight) {
+  const auto poly = FloorSeen(Camera640(), Nadir(2.0), 0.0, 4);
+  ASSERT_EQ(poly.size(), 16u);
+  // Top-left corner of the image: (-320 px, -240 px) from the centre at f = 500 px, 2 m.
+  EXPECT_NEAR(poly[0].x(), -320.0 / 500.0 * 2.0, 1e-9);
+  EXPECT_NEAR(poly[0].y(), 240.0 / 500.0 * 2.0, 1e-9);  // image up is floor +y
+  double x_min = 1e9, x_max = -1e9;
+  for (const auto& p : poly) {
+    x_min = std::min(x_min, p.x());
+    x_max = std::max(x_max, p.x());
+  }
+  EXPECT_NEAR(x_max - x_min, 640.0 / 500.0 * 2.0, 1e-9);
+  // The plane of markers 0.5 m up: a quarter less.
+  const auto up = FloorSeen(Camera640(), Nadir(2.0), 0.5, 4);
+  EXPECT_NEAR(up[0].x(), -320.0 / 500.0 * 1.5, 1e-9);
+}
+
+TEST(FloorView, RaysAboveTheHorizonAreLeftOut) {
+  // Tilted 80 degrees from the nadir about camera x: the image's top looks above the horizon.
+  FloorExtrinsics f = Nadir(1.0);
+  const double a = 80.0 * M_PI / 180.0;
+  Eigen::Matrix3d tilt;
+  tilt << 1, 0, 0, 0, std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a);
+  f.R_cf = tilt * f.R_cf;
+  f.t_cf = tilt * f.t_cf;
+  const auto poly = FloorSeen(Camera640(), f, 0.0, 8);
+  EXPECT_GT(poly.size(), 0u);
+  EXPECT_LT(poly.size(), 32u);
+  // Camera 1 m up looking above the horizon: nothing.
+  FloorExtrinsics sky = Nadir(1.0);
+  sky.R_cf = Eigen::Vector3d(1.0, 1.0, 1.0).asDiagonal();  // looking straight up
+  sky.t_cf = Eigen::Vector3d(0.0, 0.0, -1.0);
+  EXPECT_TRUE(FloorSeen(Camera640(), sky, 0.0, 8).empty());
+}
+
+}  // namespace
+}  // namespace kincal::vision
