@@ -1,15 +1,12 @@
 #include "daemon/batch_worker.h"
 
-#include <sched.h>
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+
+#include "daemon/background_thread.h"
 
 namespace kincal::daemon {
 namespace {
@@ -125,15 +122,7 @@ BatchCalibration BatchWorker::Wait() {
 }
 
 void BatchWorker::Loop(bool background) {
-  // Below the pipeline's threads: nice + kNiceIncrement (about a tenth of a core's share
-  // against a busy pipeline thread). Not SCHED_IDLE: that runs only on a core nothing else
-  // wants, and on a loaded machine (a robot's computer, a CI run of two test programs) the
-  // batch then starved for minutes and the calibration went stale. Linux keeps the nice
-  // value per thread, and the fit's own threads inherit it. Failing to lower one's own
-  // priority changes nothing that matters, so it is not an error.
-  if (background) {
-    (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), kNiceIncrement);
-  }
+  if (background) RunThisThreadInTheBackground();  // below the pipeline (background_thread.h)
   std::unique_lock lock(mu_);
   while (true) {
     cv_.wait(lock, [this] { return stop_ || pending_; });

@@ -1,7 +1,7 @@
 // The batch tier's worker thread: `kincal analyze` (the same code, Analyze) on a snapshot
 // of the run, so that neither capture nor the filter thread ever waits for it (except a
 // lossless replay, which waits at a fixed point in data time so that its decisions are
-// bit-identical run to run). The thread runs below the pipeline (nice + kNiceIncrement):
+// bit-identical run to run). The thread runs below the pipeline (background_thread.h):
 // on a loaded machine the batch finishes later, the frames do not, and it never starves.
 #pragma once
 
@@ -71,8 +71,6 @@ class BatchWorker {
   // As Wait, but nothing (the batch still running) once CancelRunning was called: a
   // pipeline that is stopping does not wait here (kincald's Finish waits instead).
   std::optional<BatchCalibration> WaitUnlessCancelled();
-
-  static constexpr int kNiceIncrement = 10;
 
  private:
   void Loop(bool background);

@@ -1,20 +1,14 @@
 #include "daemon/preview.h"
 
-#include <sys/resource.h>
-#include <sys/syscall.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "daemon/background_thread.h"
+
 namespace kincal::daemon {
 namespace {
-
-// The worker's priority below the pipeline's (as the batch worker's): a preview is late
-// before a pose is.
-constexpr int kPreviewNiceIncrement = 10;
 
 // `in` (its size a multiple of k) down by k: halvings by OpenCV's area resampling while
 // more than a factor of 2 is left (its fast path is the whole factor 2), then the rest, at
@@ -104,8 +98,7 @@ void PreviewStage::Drain() {
 }
 
 void PreviewStage::Loop() {
-  (void)setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)),
-                    kPreviewNiceIncrement);  // not being able to is harmless
+  RunThisThreadInTheBackground();  // a preview is late before a pose is
   const std::vector<int> params = {cv::IMWRITE_JPEG_QUALITY, opt_.quality};
   std::unique_lock lock(mu_);
   while (true) {

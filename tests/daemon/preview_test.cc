@@ -32,6 +32,13 @@ cv::Mat Scene(double cx, double cy) {
   return m;
 }
 
+// LCM inside the process (memq), no recording.
+bool OpenInProcess(Publisher* pub, bool lossless) {
+  LcmOptions lcm;
+  lcm.url = "memq://";
+  return pub->Open(lcm, RecordOptions{}, 16, lossless).ok();
+}
+
 TEST(Preview, TheScaleIsTheSmallestWholeFactorThatFits) {
   EXPECT_EQ(PreviewStage::Scale(1280, 640), 2);
   EXPECT_EQ(PreviewStage::Scale(1280, 480), 3);  // 426 px
@@ -41,10 +48,8 @@ TEST(Preview, TheScaleIsTheSmallestWholeFactorThatFits) {
 }
 
 TEST(Preview, LosslessPublishesAtTheRateByFrameTimeAndDecodesToTheFrame) {
-  LcmOptions lcm_opt;
-  lcm_opt.url = "memq://";
   Publisher pub;
-  ASSERT_TRUE(pub.Open(lcm_opt, RecordOptions{}, 16, /*lossless=*/true).ok());
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
   Heard heard;
   pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
   PreviewOptions o;
@@ -93,10 +98,8 @@ TEST(Preview, LosslessPublishesAtTheRateByFrameTimeAndDecodesToTheFrame) {
 // 480 px on a 1280x960 camera: a factor of 3, the rightmost 2 columns cut, and the
 // camera's pixels still where preview_t's mapping puts them.
 TEST(Preview, AFactorOfThreeCutsTheEdgeAndKeepsTheMapping) {
-  LcmOptions lcm_opt;
-  lcm_opt.url = "memq://";
   Publisher pub;
-  ASSERT_TRUE(pub.Open(lcm_opt, RecordOptions{}, 16, /*lossless=*/true).ok());
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
   Heard heard;
   pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
   {
@@ -123,10 +126,8 @@ TEST(Preview, AFactorOfThreeCutsTheEdgeAndKeepsTheMapping) {
 }
 
 TEST(Preview, ATimeJumpBackRestartsTheSchedule) {
-  LcmOptions lcm_opt;
-  lcm_opt.url = "memq://";
   Publisher pub;
-  ASSERT_TRUE(pub.Open(lcm_opt, RecordOptions{}, 16, /*lossless=*/true).ok());
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
   PreviewOptions o;
   o.rate_hz = 5;
   PreviewStage preview(o, "PREVIEW", &pub, /*lossless=*/true);
@@ -139,10 +140,8 @@ TEST(Preview, ATimeJumpBackRestartsTheSchedule) {
 
 // Live: the detection thread never waits; what the busy worker could not take is counted.
 TEST(Preview, LiveNeverWaitsAndCountsWhatItSkips) {
-  LcmOptions lcm_opt;
-  lcm_opt.url = "memq://";
   Publisher pub;
-  ASSERT_TRUE(pub.Open(lcm_opt, RecordOptions{}, 16, /*lossless=*/false).ok());
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/false));
   PreviewOptions o;
   o.rate_hz = 30;  // every frame due
   o.width = 1280;
