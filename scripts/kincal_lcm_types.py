@@ -19,3 +19,20 @@ def use_lcm_types(path=None):
                 sys.path.insert(0, c)
             return c
     return None
+
+
+# The kincal messages, by name (lcm/*.lcm).
+MESSAGE_NAMES = ("preview_t", "frame_t", "markers_t", "pose_t", "params_t", "calibration_t",
+                 "model_check_t", "health_t", "guidance_t", "controls_t", "run_t")
+
+
+def message_types():
+    """{LCM fingerprint: class} of the kincal messages (use_lcm_types first): how a reader
+    knows a message's type whatever its channel is called."""
+    import kincal
+    out = {}
+    for name in MESSAGE_NAMES:
+        cls = getattr(kincal, name, None)
+        if cls is not None:
+            out[cls._get_packed_fingerprint()] = cls
+    return out

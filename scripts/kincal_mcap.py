@@ -33,7 +33,8 @@ import sys
 import tempfile
 
 from kincal_lcm_log import LogError, read_events_at
-from kincal_lcm_types import use_lcm_types
+from kincal_lcm_types import message_types, use_lcm_types
+from kincal_markers import target_outline
 
 # Colours of the overlay (RGBA in 0..1), as `kincal view` draws them.
 IDENTIFIED = (0.1, 0.85, 0.2, 1.0)
@@ -67,27 +68,6 @@ def timestamp(utime):
     return Timestamp(sec=utime // 1_000_000, nsec=(utime % 1_000_000) * 1000)
 
 
-def convex_hull(points):
-    """Andrew's monotone chain; counter-clockwise, no repeated end point."""
-    pts = sorted(set(points))
-    if len(pts) < 3:
-        return pts
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lower, upper = [], []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    for p in reversed(pts):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return lower[:-1] + upper[:-1]
-
-
 def color(rgba):
     from foxglove.messages import Color
     return Color(r=float(rgba[0]), g=float(rgba[1]), b=float(rgba[2]), a=float(rgba[3]))
@@ -99,25 +79,22 @@ def annotations(m, scale=1):
     from foxglove.messages import (CircleAnnotation, ImageAnnotations, Point2,
                                    PointsAnnotation, PointsAnnotationType, TextAnnotation)
     ts = timestamp(m.utime)
-    circles, ident = [], []
+    circles = []
     for i in range(m.num_markers):
         x, y = (m.u[i] + 0.5) / scale, (m.v[i] + 0.5) / scale
-        ok = m.id[i] >= 0
-        if ok:
-            ident.append((x, y))
         circles.append(CircleAnnotation(timestamp=ts, position=Point2(x=x, y=y), diameter=12.0,
                                         thickness=2.0, fill_color=color((0, 0, 0, 0)),
-                                        outline_color=color(IDENTIFIED if ok else UNASSIGNED)))
+                                        outline_color=color(IDENTIFIED if m.id[i] >= 0 else UNASSIGNED)))
     points, texts = [], []
-    hull = convex_hull(ident)
-    if len(hull) >= 3:
+    outline, target = target_outline(m)
+    if outline:
+        hull = [((u + 0.5) / scale, (v + 0.5) / scale) for u, v in outline]
         points.append(PointsAnnotation(timestamp=ts, type=PointsAnnotationType.LineLoop,
                                        points=[Point2(x=x, y=y) for x, y in hull],
                                        outline_color=color(OUTLINE),
                                        thickness=2.0))
         cx = sum(p[0] for p in hull) / len(hull)
         cy = min(p[1] for p in hull) - 8.0
-        target = next((m.target_id[i] for i in range(m.num_markers) if m.id[i] >= 0), -1)
         texts.append(TextAnnotation(timestamp=ts, position=Point2(x=cx, y=cy), text=f"target {target}",
                                     font_size=12.0, text_color=color(OUTLINE),
                                     background_color=color((0, 0, 0, 0.5))))
@@ -133,14 +110,8 @@ class Exporter:
     """One pass over the log; channels made on first use."""
 
     def __init__(self, context):
-        import kincal as k
         self.context = context
-        self.types = {}
-        for name in ("preview_t", "frame_t", "markers_t", "pose_t", "params_t", "calibration_t",
-                     "model_check_t", "health_t", "guidance_t", "controls_t", "run_t"):
-            cls = getattr(k, name, None)
-            if cls is not None:
-                self.types[cls._get_packed_fingerprint()] = cls
+        self.types = message_types()
         self.channels = {}
         self.counts = {}
         self.markers = {}  # frame_sequence -> markers_t (the last MARKERS_KEPT)

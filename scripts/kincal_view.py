@@ -40,7 +40,8 @@ import sys
 import threading
 import time
 
-from kincal_lcm_types import use_lcm_types
+from kincal_lcm_types import message_types, use_lcm_types
+from kincal_markers import target_outline
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 STATIC = os.path.join(HERE, "view")
@@ -59,45 +60,14 @@ class ViewError(Exception):
     pass
 
 
-def fingerprints():
-    import kincal as k
-    out = {}
-    for name in ("preview_t", "frame_t", "markers_t", "pose_t", "params_t", "calibration_t",
-                 "model_check_t", "health_t", "guidance_t", "controls_t", "run_t"):
-        cls = getattr(k, name, None)
-        if cls is not None:
-            out[cls._get_packed_fingerprint()] = cls
-    return out
-
-
-def hull(points):
-    pts = sorted(set(points))
-    if len(pts) < 3:
-        return pts
-
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-
-    lo, up = [], []
-    for p in pts:
-        while len(lo) >= 2 and cross(lo[-2], lo[-1], p) <= 0:
-            lo.pop()
-        lo.append(p)
-    for p in reversed(pts):
-        while len(up) >= 2 and cross(up[-2], up[-1], p) <= 0:
-            up.pop()
-        up.append(p)
-    return lo[:-1] + up[:-1]
-
-
 def markers_view(m):
     """markers_t as the page draws it: camera pixels, identified or not, the outline."""
     ident = [(m.u[i], m.v[i]) for i in range(m.num_markers) if m.id[i] >= 0]
-    target = next((m.target_id[i] for i in range(m.num_markers) if m.id[i] >= 0), -1)
+    outline, target = target_outline(m)
     centre = [sum(p[0] for p in ident) / len(ident), sum(p[1] for p in ident) / len(ident)] if ident else None
     return {"utime": m.utime, "frame_sequence": m.frame_sequence,
             "u": list(m.u), "v": list(m.v), "id": list(m.id), "target_id": target,
-            "outline": [list(p) for p in hull(ident)], "centre": centre}
+            "outline": [list(p) for p in outline], "centre": centre}
 
 
 class Timeline:
@@ -273,7 +243,7 @@ class LiveSource:
 
     def __init__(self, url, timeline):
         import lcm
-        self.types = fingerprints()
+        self.types = message_types()
         try:
             self.lcm = lcm.LCM(url) if url else lcm.LCM()
         except (IOError, OSError, RuntimeError) as e:
@@ -307,7 +277,7 @@ def load_log(path, timeline):
     """A recording into the timeline; pictures stay in the file (offsets). A file that is
     not a kincal recording is a ViewError naming it."""
     from kincal_lcm_log import LogError, read_events_at
-    types = fingerprints()
+    types = message_types()
     n = 0
     try:
         for channel, data, utime, offset in read_events_at(path):
