@@ -132,12 +132,12 @@ Command AddCamcal(CLI::App& app) {
           "give either --images (with --board) or --points (with --image-size)");
     if (!a->points.empty()) {
       ParseImageSize(a->size, &opt.width, &opt.height);
-      views = vision::ReadCalibrationPoints(a->points);
+      views = OrThrow(vision::ReadCalibrationPoints(a->points));
     } else {
       if (a->board.empty()) throw std::runtime_error("--images needs --board KIND:COLSxROWS:PITCH");
       views = ViewsFromImages(a->images, Board::Parse(a->board), &opt.width, &opt.height);
     }
-    const auto r = vision::CalibrateCamera(views, opt);
+    const auto r = OrThrow(vision::CalibrateCamera(views, opt));
     if (const Status s = vision::WriteCameraYaml(r.camera, a->out); !s.ok())
       throw std::runtime_error(s.message());
     const std::string ros = CameraInfoPath(a->out);

@@ -96,8 +96,9 @@ std::unique_ptr<Workspace> WorkspaceFrom(const PlanArgs& a) {
   if (a.camera.empty() || a.floor.empty()) {
     throw std::runtime_error("a workspace is needed: --arena X0,Y0,X1,Y1, or --camera and --floor");
   }
-  return MakeCameraView(vision::ReadCameraYaml(a.camera), vision::ReadFloorYaml(a.floor),
-                        vision::ReadTargetLayoutYaml(a.target), a.target_height_m, a.margin_px);
+  return MakeCameraView(
+      OrThrow(vision::ReadCameraYaml(a.camera)), OrThrow(vision::ReadFloorYaml(a.floor)),
+      OrThrow(vision::ReadTargetLayoutYaml(a.target)), a.target_height_m, a.margin_px);
 }
 
 PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {

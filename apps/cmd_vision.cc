@@ -32,7 +32,7 @@ void WriteImage(const std::string& path, const cv::Mat& image) {
 }
 
 vision::TargetLayout LoadLayout(const std::string& path) {
-  return vision::ReadTargetLayoutYaml(path);
+  return OrThrow(vision::ReadTargetLayoutYaml(path));
 }
 
 }  // namespace
@@ -100,7 +100,7 @@ Command AddRender(CLI::App& app) {
   return [a]() -> int {
     vision::CameraModel cam;
     if (!a->intrinsics.empty()) {
-      cam = vision::ReadCameraYaml(a->intrinsics);
+      cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
     } else {
       cam.width = 640;
       cam.height = 480;
@@ -177,7 +177,7 @@ Command AddDetect(CLI::App& app) {
     const auto layout = LoadLayout(a->layout);
     std::string pose_text;
     if (!a->intrinsics.empty()) {
-      const auto cam = vision::ReadCameraYaml(a->intrinsics);
+      const auto cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
       if (cam.width != grey.cols || cam.height != grey.rows) {
         throw std::runtime_error(a->image + ": image is " + std::to_string(grey.cols) + "x" +
                                  std::to_string(grey.rows) + " but " + a->intrinsics + " is for " +
@@ -247,7 +247,7 @@ Command AddFloorcal(CLI::App& app) {
     const Board board = Board::Parse(a->board);
     const std::string& kind = board.kind;
     const int cols = board.cols, rows = board.rows;
-    const auto cam = vision::ReadCameraYaml(a->intrinsics);
+    const auto cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
     const cv::Mat img = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
     if (img.empty()) throw std::runtime_error(a->image + ": unreadable image");
     if (img.cols != cam.width || img.rows != cam.height)

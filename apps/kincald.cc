@@ -40,7 +40,7 @@ std::string DefaultConfig() {
 
 // The options, into `o`; config is the file given (or empty).
 void AddOptions(CLI::App* app, std::string* config, kincal::daemon::CommandLineOptions* o,
-                bool* quiet) {
+                bool* quiet, bool* config_keys) {
   app->add_option("-c,--config", *config,
                   "YAML config (default: the simulated robot, config/kincald_sim.yaml)");
   auto* dev =
@@ -76,6 +76,26 @@ void AddOptions(CLI::App* app, std::string* config, kincal::daemon::CommandLineO
                   "robot effects: 'auto' (found and added online), 'none', or specs separated by "
                   "commas, e.g. time_offset,auto");
   app->add_flag("-q,--quiet", *quiet, "log warnings and errors only");
+  app->add_flag("--config-keys", *config_keys,
+                "print every config key with its default (docs/config_keys.md) and exit");
+}
+
+// docs/config_keys.md: every key the loaders read, with its default.
+void PrintConfigKeys() {
+  std::cout << "# kincald's configuration keys\n\n"
+               "Every key a kincald config file may hold, with its default, as `kincald "
+               "--config-keys`\nprints them from the loaders themselves (a test keeps this "
+               "file equal to that).\nWhat each means: the options structs in "
+               "`include/kincal/daemon/config.h` and the\nsections of docs/daemon.md; the "
+               "shipped configs in `config/` comment their keys.\n\n"
+               "| key | default |\n|---|---|\n";
+  for (const auto& k : kincal::daemon::DaemonConfigKeys()) {
+    std::string value = k.default_value;
+    for (size_t at = value.find('|'); at != std::string::npos; at = value.find('|', at + 2))
+      value.replace(at, 1, "\\|");
+    std::cout << "| `" << k.key << "` | " << (value.empty() ? "(empty)" : "`" + value + "`")
+              << " |\n";
+  }
 }
 
 // The configuration file (or the built-in defaults without one) with the command line
@@ -118,9 +138,13 @@ int main(int argc, char** argv) {
       "kincald: online kinematic calibration daemon (capture -> markers -> pose -> SR-DD2 -> LCM)"};
   std::string config;
   kincal::daemon::CommandLineOptions options;
-  bool quiet = false;
-  AddOptions(&app, &config, &options, &quiet);
+  bool quiet = false, config_keys = false;
+  AddOptions(&app, &config, &options, &quiet, &config_keys);
   CLI11_PARSE(app, argc, argv);
+  if (config_keys) {
+    PrintConfigKeys();
+    return 0;
+  }
   if (quiet) spdlog::set_level(spdlog::level::warn);
 
   // SIGINT/SIGTERM go to one thread that asks the daemon to stop (drain, final estimate,

@@ -13,17 +13,18 @@
 #include <thread>
 #include <vector>
 
-#include "daemon/batch_tier.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/daemon.h"
 #include "kincal/io/recording.h"
+#include "kincal/online/batch_tier.h"
 #include "kincal/vision/camera.h"
 
 namespace kincal::daemon {
 namespace {
 
 DaemonConfig Base() {
-  DaemonConfig c = LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml");
+  DaemonConfig c =
+      ReadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml").value();
   c.lcm.url = "memq://";
   return c;
 }
@@ -38,7 +39,8 @@ const std::string& Log() {
     c.sim.speed = 0;
     c.sim.duration_s = 20;
     c.record.path = p.string();
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     d.Run();
     return p.string();
   }();
@@ -59,7 +61,8 @@ double ReplayFramesPerSecond(benchmark::State& state, const DaemonConfig& c) {
   int64_t frames = 0;
   double seconds = 0;
   for (auto _ : state) {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     const auto t0 = std::chrono::steady_clock::now();
     d.Run();
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -110,7 +113,8 @@ FormatRecording RecordFormat(int width, int height, FrameEncoding encoding) {
   c.sim.duration_s = 10;
   c.record.path = (dir / (stem + ".lcm")).string();
   c.record.frame_encoding = encoding;
-  Daemon d(c);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+  Daemon& d = *d_owner;
   d.Run();
   return {c.record.path, c.camera.intrinsics};
 }
@@ -157,10 +161,11 @@ void BM_DaemonLatencyDuringBatch(benchmark::State& state) {
   DaemonCounters c{};
   for (auto _ : state) {
     DaemonConfig cfg =
-        LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim_lag.yaml");
+        ReadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim_lag.yaml").value();
     cfg.lcm.url = "memq://";
     cfg.sim.duration_s = 100;
-    Daemon d(cfg);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(cfg).value();
+    Daemon& d = *d_owner;
     d.Run();
     c = d.counters();
   }
@@ -174,7 +179,8 @@ BENCHMARK(BM_DaemonLatencyDuringBatch)->Unit(benchmark::kMillisecond)->Iteration
 // daemon's default, 0, is one per core; 1 for comparison),
 // over the first 10 minutes of a real robot's motion (MR.CLAM dataset 6, motion capture
 // thinned to 10 Hz poses, its odometry commands as the controls): through the store, as
-// kincald runs it at shutdown. Args: robot, robot.effects: auto (1) or nothing (0), threads.
+// kincald runs it at shutdown (inline: the fit's own time). Args: robot, robot.effects: auto (1) or
+// nothing (0), threads.
 void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
   const std::string dir = std::string(KINCAL_SOURCE_DIR) + "/../shared/data/mrclam/dataset6";
   if (!std::filesystem::is_directory(dir)) {
@@ -188,7 +194,7 @@ void BM_DaemonBatchMrclam10Min(benchmark::State& state) {
     BatchTierOptions o;
     o.auto_effects = state.range(1) != 0;
     o.threads = static_cast<int>(state.range(2));
-    BatchTier tier(o, "unicycle", {}, {}, 2);
+    BatchTier tier(o, "unicycle", {}, {}, 2, std::make_unique<InlineBatchRunner>());
     const TimeNs t0 = rec.poses.front().t_ns, end = t0 + SecondsToNs(600.0);
     TimeNs next_pose = t0;
     size_t c = 0;
@@ -233,7 +239,8 @@ void BM_DaemonLatencySpeed1(benchmark::State& state) {
   for (auto _ : state) {
     DaemonConfig cfg = FastReplayOf(log);
     cfg.replay.speed = 1;
-    Daemon d(cfg);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(cfg).value();
+    Daemon& d = *d_owner;
     d.Run();
     c = d.counters();
   }

@@ -37,7 +37,7 @@ const Recorded& Recording1280() {
     const std::string stem = "kincal_bench_preview_" + std::to_string(::getpid());
     Recorded out;
     DaemonConfig& c = out.config;
-    c = LoadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml");
+    c = ReadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml").value();
     c.lcm.url = "memq://";
     vision::CameraModel cam;
     cam.width = 1280;
@@ -52,7 +52,8 @@ const Recorded& Recording1280() {
     c.record.path = (dir / (stem + ".lcm")).string();
     c.record.frame_encoding = FrameEncoding::kJpeg;
     {
-      Daemon d(c);
+      const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+      Daemon& d = *d_owner;
       d.Run();
     }
     lcm::LogFile log(c.record.path, "r");
@@ -64,7 +65,7 @@ const Recorded& Recording1280() {
       f.width = m.width;
       f.height = m.height;
       f.stride = m.stride;
-      f.format = ParsePixelFormat(m.pixel_format);
+      f.format = ParsePixelFormat(m.pixel_format).value();
       f.utime = m.utime;
       f.sequence = m.sequence;
       out.frames.push_back(std::move(f));
@@ -82,7 +83,7 @@ void BM_PoseStageFrame1280(benchmark::State& state) {
     state.SkipWithError("no recording");
     return;
   }
-  const VisionSetup vis = LoadVisionSetup(r.config);
+  const VisionSetup vis = LoadVisionSetup(r.config).value();
   PoseStage stage(r.config.pose, r.config.detector, vis);
   PoseSample p;
   std::string error;
@@ -102,7 +103,7 @@ void BM_PreviewFrame1280(benchmark::State& state) {
     return;
   }
   std::vector<cv::Mat> grey(r.frames.size());
-  for (size_t k = 0; k < grey.size(); ++k) ToGrey(r.frames[k], &grey[k]);
+  for (size_t k = 0; k < grey.size(); ++k) (void)ToGrey(r.frames[k], &grey[k]);
   Publisher pub;
   LcmOptions lcm_opt;
   lcm_opt.url = "memq://";

@@ -305,7 +305,7 @@ void CalibrationBenchmark(benchmark::State& state, bool opencv) {
       est = r.camera;
       rms = r.rms_px;
     } else {
-      const CalibrationResult r = CalibrateCamera(views, opt);
+      const CalibrationResult r = CalibrateCamera(views, opt).value();
       est = r.camera;
       rms = r.rms_px;
     }

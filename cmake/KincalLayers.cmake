@@ -3,7 +3,7 @@
 # include/kincal/<layer>/ public; core's public headers sit directly in include/kincal/).
 # CMakeLists.txt builds the libraries from this list; cmake/CheckLayers.cmake fails the
 # build on an include that runs up a layer or into another layer's private headers.
-set(KINCAL_LAYERS core io estimation vision sim analysis plan daemon)
+set(KINCAL_LAYERS core io estimation vision sim analysis plan online daemon)
 set(KINCAL_LAYER_core_USES "")
 set(KINCAL_LAYER_io_USES core)
 set(KINCAL_LAYER_estimation_USES core)
@@ -11,4 +11,5 @@ set(KINCAL_LAYER_vision_USES core io estimation)
 set(KINCAL_LAYER_sim_USES core estimation vision)
 set(KINCAL_LAYER_analysis_USES core io estimation)
 set(KINCAL_LAYER_plan_USES core io estimation vision sim)
-set(KINCAL_LAYER_daemon_USES core io estimation vision sim analysis plan)
+set(KINCAL_LAYER_online_USES core io estimation vision sim analysis plan)
+set(KINCAL_LAYER_daemon_USES core io estimation vision sim analysis plan online)

@@ -79,7 +79,7 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
   c.replay.path = path;
   c.replay.speed = 0;
   Expect([&] {
-    kincal::daemon::ControlSample s;
+    kincal::ControlSample s;
     std::string why;
     auto src =
         kincal::daemon::MakeReplaySource(c.replay, c.lcm, [&](const void* d, size_t n, int64_t t) {
@@ -92,13 +92,13 @@ void FuzzLcmLog(const uint8_t* data, size_t size) {
     for (int i = 0; i < 64; ++i) {
       const auto st = src->Next(&f, 0, &error);
       if (st != kincal::daemon::SourceStatus::kFrame) break;
-      Expect([&] { kincal::daemon::ToGrey(f, &grey); });
+      Expect([&] { (void)kincal::daemon::ToGrey(f, &grey); });
     }
   });
 }
 
 void FuzzControls(const uint8_t* data, size_t size) {
-  kincal::daemon::ControlSample s;
+  kincal::ControlSample s;
   std::string why;
   kincal::daemon::DecodeControls(data, size, Diffdrive(), false, 1, &s, &why);
   kincal::daemon::DecodeControls(data, size, Diffdrive(), true, 1, &s, &why);
@@ -136,9 +136,13 @@ void FuzzMrclam(const uint8_t* data, size_t size) {
 
 void FuzzYaml(const uint8_t* data, size_t size) {
   const std::string path = WriteFile("config.yaml", data, size);
-  Expect([&] { kincal::daemon::Validate(kincal::daemon::LoadDaemonConfig(path)); });
+  Expect([&] {
+    const auto c = kincal::daemon::ReadDaemonConfig(path);
+    std::string error;
+    if (c.ok()) (void)c->IsValid(&error);
+  });
   Expect([&] { (void)kincal::LoadScenario(path); });
-  Expect([&] { kincal::vision::ReadTargetLayoutYaml(path); });
+  Expect([&] { (void)kincal::vision::ReadTargetLayoutYaml(path); });
 }
 
 void FuzzCheckpoint(const uint8_t* data, size_t size) {
@@ -169,7 +173,7 @@ void FuzzFrame(const uint8_t* data, size_t size) {
   f.stride = f.width * (data[3] % 4) + data[4] % 8;
   f.data.assign(data + 5, data + size);
   cv::Mat grey;
-  Expect([&] { kincal::daemon::ToGrey(f, &grey); });
+  Expect([&] { (void)kincal::daemon::ToGrey(f, &grey); });
 }
 
 }  // namespace

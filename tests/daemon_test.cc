@@ -52,7 +52,8 @@ TEST(DaemonSim, ConvergesToTheSimulatedRobotAndReplaysBitIdentically) {
   Checkpoint live;
   DaemonCounters lc;
   {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
     live = d.Estimate();
     lc = d.counters();
@@ -72,7 +73,8 @@ TEST(DaemonSim, ConvergesToTheSimulatedRobotAndReplaysBitIdentically) {
     r.replay.path = c.record.path;
     r.replay.speed = 0;
     r.record.path.clear();
-    Daemon d(r);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(r).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
     replays.push_back(d.Estimate());
     EXPECT_EQ(d.counters().frames_captured, lc.frames_captured);
@@ -89,12 +91,14 @@ TEST(DaemonSim, ControlsOverLcmAndPublishedOutputs) {
   c.sim.controls_via_lcm = true;  // the filter gets the robot's controls only through LCM
   c.sim.speed = 4;                // paced: LCM delivery keeps up
   c.robot.control_stamp = ControlStamp::kReceive;
-  EXPECT_THROW(Validate(c), std::runtime_error) << "wall-clock receive stamps on a 4x simulation";
+  std::string error;
+  EXPECT_FALSE(c.IsValid(&error)) << "wall-clock receive stamps on a 4x simulation";
   c.robot.control_stamp = ControlStamp::kMapped;
-  EXPECT_THROW(Validate(c), std::runtime_error) << "a 4x clock does not map onto the wall clock";
+  EXPECT_FALSE(c.IsValid(&error)) << "a 4x clock does not map onto the wall clock";
   c.robot.control_stamp = ControlStamp::kSender;
   c.record.path = TempPath("sim_lcm.lcm");
-  Daemon d(c);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+  Daemon& d = *d_owner;
   ASSERT_EQ(d.Run(), 0);
   const DaemonCounters k = d.counters();
   ExpectConvergedWithin3Sigma(d.Estimate(), Truth(c));
@@ -125,7 +129,8 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
   c.checkpoint.path = TempPath("resume.json");
   Checkpoint first;
   {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
     first = d.Estimate();
   }
@@ -137,7 +142,8 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
   DaemonConfig c2 = c;
   c2.checkpoint.resume = c.checkpoint.path;
   c2.checkpoint.path.clear();
-  Daemon d2(c2);
+  const std::unique_ptr<Daemon> d2_owner = Daemon::Create(c2).value();
+  Daemon& d2 = *d2_owner;
   ASSERT_EQ(d2.Run(), 0);
   const Checkpoint second = d2.Estimate();
   for (int i = 0; i < 3; ++i) {
@@ -146,8 +152,9 @@ TEST(DaemonSim, ResumesFromItsCheckpoint) {
   }
   ExpectConvergedWithin3Sigma(second, Truth(c));
   c2.checkpoint.resume = TempPath("missing.json");
-  EXPECT_THROW(Daemon d3(c2), std::runtime_error)
-      << "a missing checkpoint is an error, not a silent fresh start";
+  const StatusOr<std::unique_ptr<Daemon>> d3 = Daemon::Create(c2);
+  ASSERT_FALSE(d3.ok()) << "a missing checkpoint is an error, not a silent fresh start";
+  EXPECT_NE(d3.status().message().find("missing.json"), std::string::npos) << d3.status().message();
 }
 
 // Reproduces a robot.fixed run whose checkpoint could be neither resumed nor exported:
@@ -160,7 +167,8 @@ TEST(DaemonSim, ResumesAndExportsACheckpointWithAHeldParameter) {
   c.robot.fixed = {{"d", truth.at("d")}};
   c.checkpoint.path = TempPath("held.json");
   {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
   }
   StatusOr<Checkpoint> saved = ReadCheckpoint(c.checkpoint.path);
@@ -177,7 +185,8 @@ TEST(DaemonSim, ResumesAndExportsACheckpointWithAHeldParameter) {
     c2.checkpoint.resume = c.checkpoint.path;
     c2.checkpoint.path.clear();
     if (!still_held) c2.robot.fixed.clear();
-    Daemon d2(c2);
+    const std::unique_ptr<Daemon> d2_owner = Daemon::Create(c2).value();
+    Daemon& d2 = *d2_owner;
     ASSERT_EQ(d2.Run(), 0) << "held " << still_held;
     const Checkpoint e = d2.Estimate();
     ASSERT_EQ(e.names.size(), 3u);
@@ -200,7 +209,8 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
   c.preview.enabled = true;
   c.record.path = TempPath("preview.lcm");
   {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
   }
   lcm::LogFile log(c.record.path, "r");
@@ -243,40 +253,32 @@ TEST(DaemonOutputs, ASecondDaemonOnTheSameOutputIsRefusedNamingTheFirst) {
   DaemonConfig c = SimConfig5Hz(2);
   c.record.path = TempPath("shared.lcm");
   c.checkpoint.path = TempPath("shared.json");
-  Daemon first(c);
+  const std::unique_ptr<Daemon> first_owner = Daemon::Create(c).value();
+  Daemon& first = *first_owner;
   const std::string pid = "(pid " + std::to_string(::getpid());
-  try {
-    Daemon second(c);
-    FAIL() << "a second daemon recording to the same path was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(
-        std::string(e.what()).find("shared.lcm: the recording is in use by another process " + pid),
-        std::string::npos)
-        << e.what();
-  }
+  const StatusOr<std::unique_ptr<Daemon>> refused1 = Daemon::Create(c);
+  ASSERT_FALSE(refused1.ok()) << "a second daemon recording to the same path was accepted";
+  EXPECT_NE(refused1.status().message().find(
+                "shared.lcm: the recording is in use by another process " + pid),
+            std::string::npos)
+      << refused1.status().message();
   DaemonConfig ck_only = c;
   ck_only.record.path = TempPath("other.lcm");
-  try {
-    Daemon second(ck_only);
-    FAIL() << "a second daemon writing the same checkpoint was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("shared.json: the checkpoint is in use"),
-              std::string::npos)
-        << e.what();
-  }
+  const StatusOr<std::unique_ptr<Daemon>> refused2 = Daemon::Create(ck_only);
+  ASSERT_FALSE(refused2.ok()) << "a second daemon writing the same checkpoint was accepted";
+  EXPECT_NE(refused2.status().message().find("shared.json: the checkpoint is in use"),
+            std::string::npos)
+      << refused2.status().message();
   EXPECT_EQ(first.Run(), 0);
 }
 
 TEST(DaemonOutputs, AnUnwritableCheckpointFolderFailsAtStart) {
   DaemonConfig c = SimConfig5Hz(2);
   c.checkpoint.path = TempPath("no_such_folder") + "/ck.json";
-  try {
-    Daemon d(c);
-    FAIL() << "started with a checkpoint it cannot write";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("No such file or directory"), std::string::npos)
-        << e.what();
-  }
+  const StatusOr<std::unique_ptr<Daemon>> refused3 = Daemon::Create(c);
+  ASSERT_FALSE(refused3.ok()) << "started with a checkpoint it cannot write";
+  EXPECT_NE(refused3.status().message().find("No such file or directory"), std::string::npos)
+      << refused3.status().message();
 }
 
 TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
@@ -287,7 +289,8 @@ TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
   c.record.path = TempPath("clean.lcm");
   Checkpoint clean;
   {
-    Daemon d(c);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
     clean = d.Estimate();
   }
@@ -343,7 +346,8 @@ TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
   r.replay.path = hostile;
   r.replay.speed = 0;
   r.record.path.clear();
-  Daemon d(r);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(r).value();
+  Daemon& d = *d_owner;
   ASSERT_EQ(d.Run(), 0);
   EXPECT_EQ(d.counters().messages_rejected, 4);
   EXPECT_EQ(d.counters().frames_bad, 2);  // the corrupt frame and the cut-short end

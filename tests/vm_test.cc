@@ -191,7 +191,7 @@ TEST(VmV4l2, PosesRenderedIntoVividComeBackThroughTheCaptureNode) {
     close(fd);
   }
   const DaemonConfig cfg = VividConfig(cap);
-  const VisionSetup vis = LoadVisionSetup(cfg);
+  const VisionSetup vis = LoadVisionSetup(cfg).value();
   VividOutput output(out);
   auto source = MakeV4l2Source(cfg.v4l2);
   ASSERT_TRUE(source->Start().ok());
@@ -248,7 +248,8 @@ TEST(VmV4l2, DaemonCapturesAndRecordsFromVivid) {
   cfg.lcm.url = "memq://";
   cfg.record.path =
       std::string(std::getenv("TMPDIR") ? std::getenv("TMPDIR") : "/tmp") + "/vivid.lcm";
-  Daemon d(cfg);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(cfg).value();
+  Daemon& d = *d_owner;
   std::thread stopper([&d] {  // stops once 30 frames are in, or at a 60 s deadline
     const auto until = std::chrono::steady_clock::now() + std::chrono::seconds(60);
     while (d.counters().frames_captured <= 30 && std::chrono::steady_clock::now() < until) {
@@ -366,7 +367,8 @@ TEST(VmV4l2, TheDeviceDisappearsAndComesBack) {
   cam.cx = cam.width / 2.0;
   cam.cy = cam.height / 2.0;
   ASSERT_TRUE(vision::WriteCameraYaml(cam, cfg.camera.intrinsics).ok());
-  Daemon d(cfg);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(cfg).value();
+  Daemon& d = *d_owner;
   int rc = -1;
   std::thread runner([&] { rc = d.Run(); });
   struct Join {  // stop and join even when an assertion returns early

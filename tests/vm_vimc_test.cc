@@ -149,7 +149,7 @@ TEST(VmVimc, TheNegotiatedFormatIsConvertedToGreyCorrectly) {
     ASSERT_EQ(frames.size(), 3u);
     const Frame& f = frames.back();
     cv::Mat grey;
-    ToGrey(f, &grey);
+    ASSERT_TRUE(ToGrey(f, &grey).ok());
     auto bar = [&](int b) {
       return static_cast<int>(grey.at<uint8_t>(f.height / 2, (2 * b + 1) * f.width / 16));
     };

@@ -51,7 +51,8 @@ void CaptureStage::Run(const std::atomic<bool>& stop) {
     counters_.frames_captured.fetch_add(1);
     last_frame_mono_.store(MonotonicNs());
     if (frame_messages) {
-      FillFrameMessage(f, opt_.encoding, &png, &msg);
+      // A frame that does not decode is recorded raw; the pose stage counts and reports it.
+      (void)FillFrameMessage(f, opt_.encoding, &png, &msg);
       publisher_.Publish(opt_.frame_channel, f.utime, msg, opt_.publish_frames);
     }
     out_.Push(f);

@@ -5,12 +5,20 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
 
 namespace kincal::daemon {
 namespace {
+
+// A config file that cannot be read (file:line and the key); thrown by the loaders below
+// and caught in ReadDaemonConfig, never outside this file.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 template <typename E>
 struct Named {
@@ -57,26 +65,33 @@ std::string NameList(const std::array<Named<E>, N>& table) {
 // the file was one we know.
 class Section {
  public:
-  Section(YAML::Node node, std::string file, std::string prefix)
-      : node_(std::move(node)), file_(std::move(file)), prefix_(std::move(prefix)) {
+  // `catalogue` (optional): every key read is listed there with the value it had before
+  // (the default, when nothing was loaded): DaemonConfigKeys.
+  Section(YAML::Node node, std::string file, std::string prefix,
+          std::vector<ConfigKey>* catalogue = nullptr)
+      : node_(std::move(node)),
+        file_(std::move(file)),
+        prefix_(std::move(prefix)),
+        catalogue_(catalogue) {
     if (node_ && !node_.IsMap())
-      throw std::runtime_error(Where(node_) + ": '" + prefix_ + "' must be a map");
+      throw ConfigError(Where(node_) + ": '" + prefix_ + "' must be a map");
   }
   template <typename T>
   void Get(const std::string& key, T* out) {
-    known_.insert(key);
+    List(key, Rendered(*out));
     if (!node_ || !node_[key] || node_[key].IsNull()) return;
     try {
       *out = node_[key].as<T>();
     } catch (const YAML::Exception& e) {
-      throw std::runtime_error(Where(node_[key]) + ": key '" + prefix_ + key + "': " + e.msg);
+      throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key + "': " + e.msg);
     }
   }
   // One of a fixed set of names, turned into its enum value here, once.
   template <typename E, size_t N>
   void Choice(const std::string& key, E* out, const std::array<Named<E>, N>& table) {
     std::string name;
-    Get(key, &name);
+    List(key, std::string(NameOf(table, *out)) + " (" + NameList(table) + ")");
+    Read(key, &name);
     if (name.empty()) return;
     for (const auto& n : table) {
       if (n.name == name) {
@@ -84,8 +99,8 @@ class Section {
         return;
       }
     }
-    throw std::runtime_error(Where(node_[key]) + ": key '" + prefix_ + key + "': expected " +
-                             NameList(table) + ", got '" + name + "'");
+    throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key + "': expected " +
+                      NameList(table) + ", got '" + name + "'");
   }
   void Path(const std::string& key, std::string* out, const std::string& base_dir) {
     Get(key, out);
@@ -96,14 +111,14 @@ class Section {
   // A list of effect specs, or "auto", or a list with "auto" among the specs: the declared
   // effects, and whether the daemon may add more online.
   void Effects(const std::string& key, std::vector<std::string>* list, bool* automatic) {
-    known_.insert(key);
+    List(key, *automatic ? "auto" : Rendered(*list));
     if (!node_ || !node_[key] || node_[key].IsNull()) return;
     const YAML::Node n = node_[key];
     if (n.IsScalar() && n.as<std::string>() == "auto") {
       *automatic = true;
       return;
     }
-    Get(key, list);
+    Read(key, list);
     const auto a = std::find(list->begin(), list->end(), "auto");
     if (a != list->end()) {
       *automatic = true;
@@ -112,7 +127,7 @@ class Section {
   }
   Section Sub(const std::string& key) {
     known_.insert(key);
-    return Section(node_ ? node_[key] : YAML::Node(), file_, prefix_ + key + ".");
+    return Section(node_ ? node_[key] : YAML::Node(), file_, prefix_ + key + ".", catalogue_);
   }
   void CheckUnknown() const {
     if (!node_) return;
@@ -121,8 +136,8 @@ class Section {
       if (!known_.count(key)) {
         std::string list;
         for (const auto& k : known_) list += (list.empty() ? "" : ", ") + k;
-        throw std::runtime_error(Where(kv.first) + ": unknown key '" + prefix_ + key +
-                                 "' (expected one of: " + list + ")");
+        throw ConfigError(Where(kv.first) + ": unknown key '" + prefix_ + key +
+                          "' (expected one of: " + list + ")");
       }
     }
   }
@@ -131,12 +146,45 @@ class Section {
   std::string Where(const YAML::Node& n) const {
     return file_ + ":" + std::to_string(n.Mark().line + 1);
   }
+  void List(const std::string& key, std::string default_value) {
+    known_.insert(key);
+    if (catalogue_ != nullptr) catalogue_->push_back({prefix_ + key, std::move(default_value)});
+  }
+  // A value as YAML would write it in flow style (a list in brackets; a number in the
+  // fewest digits that read back to it).
+  template <typename T>
+  static std::string Rendered(const T& value) {
+    YAML::Emitter e;
+    e << YAML::Flow << YAML::Node(value);
+    return e.c_str();
+  }
+  static std::string Rendered(double value) {
+    char buf[32];
+    const auto end = std::to_chars(buf, buf + sizeof buf, value).ptr;
+    return std::string(buf, end);
+  }
+  static std::string Rendered(const std::vector<double>& values) {
+    std::string out = "[";
+    for (size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + Rendered(values[i]);
+    return out + "]";
+  }
+  // Get without listing the key again (Choice and Effects list theirs).
+  template <typename T>
+  void Read(const std::string& key, T* out) {
+    std::vector<ConfigKey>* catalogue = catalogue_;
+    catalogue_ = nullptr;
+    Get(key, out);
+    catalogue_ = catalogue;
+  }
   YAML::Node node_;
   std::string file_, prefix_;
   std::set<std::string> known_;
+  std::vector<ConfigKey>* catalogue_;
 };
 
-// The sections of a config file, one loader each (LoadDaemonConfig calls them in order).
+// The sections of a config file, one loader each (LoadSections calls them in order). The
+// loaders are the one list of the keys: reading, the unknown-key check and the reference
+// (DaemonConfigKeys, docs/config_keys.md) all come from their calls.
 void LoadLcm(Section s, DaemonConfig& c) {
   s.Get("url", &c.lcm.url);
   s.Get("controls_channel", &c.lcm.controls_channel);
@@ -245,13 +293,11 @@ void LoadRobot(Section s, DaemonConfig& c) {
 void LoadFilter(Section s, DaemonConfig& c, const std::string& path) {
   s.Get("type", &c.filter.type);
   s.Get("control_psd", &c.filter.control_psd);
-  std::vector<double> psd;
+  std::vector<double> psd(c.filter.pose_psd.begin(), c.filter.pose_psd.end());
   s.Get("pose_psd", &psd);
-  if (!psd.empty()) {
-    if (psd.size() != kPoseDim)
-      throw std::runtime_error(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
-    c.filter.pose_psd = {psd[0], psd[1], psd[2]};
-  }
+  if (psd.size() != kPoseDim)
+    throw ConfigError(path + ": filter.pose_psd needs 3 values (m^2/s, m^2/s, rad^2/s)");
+  c.filter.pose_psd = {psd[0], psd[1], psd[2]};
   s.Get("max_pose_gap_s", &c.filter.max_pose_gap_s);
   s.Get("params_rate_hz", &c.filter.params_rate_hz);
   s.Get("control_history_s", &c.filter.control_history_s);
@@ -320,28 +366,13 @@ void LoadGuidance(Section s, DaemonConfig& c) {
 
 }  // namespace
 
-StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path) {
-  try {
-    return LoadDaemonConfig(path);
-  } catch (const std::exception& e) {
-    return Status::Error(e.what());
-  }
-}
+namespace {
 
-DaemonConfig LoadDaemonConfig(const std::string& path) {
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw std::runtime_error(path + ": cannot open config file");
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
-  if (!root || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+// Every section's loader, in order, on `root` (a catalogue, when given, lists each key).
+void LoadSections(const YAML::Node& root, const std::string& path,
+                  std::vector<ConfigKey>* catalogue, DaemonConfig& c) {
   const std::string dir = std::filesystem::path(path).parent_path().string();
-  DaemonConfig c;
-  c.file = path;
-  Section top(root, path, "");
+  Section top(root, path, "", catalogue);
   top.Choice("source", &c.source, kSourceNames);
   top.Get("health_rate_hz", &c.health_rate_hz);
   top.Get("no_target_warn_s", &c.no_target_warn_s);
@@ -363,7 +394,41 @@ DaemonConfig LoadDaemonConfig(const std::string& path) {
   LoadGuidance(top.Sub("guidance"), c);
   LoadPreview(top.Sub("preview"), c);
   top.CheckUnknown();
+}
+
+DaemonConfig LoadDaemonConfig(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open config file");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+  DaemonConfig c;
+  c.file = path;
+  LoadSections(root, path, nullptr, c);
   return c;
+}
+
+}  // namespace
+
+std::vector<ConfigKey> DaemonConfigKeys() {
+  std::vector<ConfigKey> keys;
+  DaemonConfig c;
+  LoadSections(YAML::Node(YAML::NodeType::Map), "defaults", &keys, c);
+  return keys;
+}
+
+StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path) {
+  try {
+    return LoadDaemonConfig(path);
+  } catch (const ConfigError& e) {
+    return Status::Error(e.what());
+  } catch (const YAML::Exception& e) {
+    return Status::Error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
 }
 
 std::string_view SourceName(SourceKind k) { return NameOf(kSourceNames, k); }

@@ -154,27 +154,6 @@ bool RobotOptions::IsValid(std::string* error) const {
   return true;
 }
 
-bool FilterOptions::IsValid(std::string* error) const {
-  if (!FilterRegistry::Instance().Has(type)) {
-    *error = "filter.type: unknown filter '" + type +
-             "' (known: " + FilterRegistry::Instance().KnownList() + ")";
-    return false;
-  }
-  for (double v : control_psd) {
-    if (!Expect(v >= 0, "filter.control_psd must be >= 0", error)) return false;
-  }
-  for (double v : pose_psd) {
-    if (!Expect(v >= 0, "filter.pose_psd must be >= 0", error)) return false;
-  }
-  return Expect(max_pose_gap_s > 0 && params_rate_hz >= 0 && control_history_s > 0,
-                "filter.max_pose_gap_s, control_history_s must be > 0, params_rate_hz >= 0",
-                error) &&
-         Expect(gate_nis >= 0 && divergence_gated >= 1,
-                "filter.gate_nis >= 0, divergence_gated >= 1", error) &&
-         Expect(batch_window_s > 0 && batch_window_s <= control_history_s,
-                "filter.batch_window_s must be in (0, control_history_s]", error);
-}
-
 bool QueueOptions::IsValid(std::string* error) const {
   // Upper bounds keep memory bounded by the configuration: a frame slot holds a whole
   // image, the others a sample or a log event each.
@@ -303,11 +282,6 @@ bool DaemonConfig::IsValid(std::string* error) const {
     return false;
   }
   return GuidanceFitsTheRobot(*this, error);
-}
-
-void Validate(const DaemonConfig& c) {
-  std::string error;
-  if (!c.IsValid(&error)) throw std::runtime_error("config: " + error);
 }
 
 }  // namespace kincal::daemon

@@ -11,9 +11,9 @@
 #include "daemon/control_clock.h"
 #include "daemon/counters.h"
 #include "daemon/publisher.h"
-#include "daemon/samples.h"
 #include "kincal/daemon/config.h"
 #include "kincal/model.h"
+#include "kincal/online/samples.h"
 
 namespace kincal::daemon {
 

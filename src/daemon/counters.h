@@ -8,12 +8,14 @@
 #include <cstdint>
 
 #include "kincal/daemon/daemon.h"
+#include "kincal/online/counters.h"
 
 namespace kincal::daemon {
 
-struct CounterSet {
+// The online estimator's counters are the base (the filter stage writes them).
+struct CounterSet : OnlineCounters {
 #define KINCAL_COUNTER_ATOMIC(name, meaning) std::atomic<int64_t> name{0};
-  KINCAL_DAEMON_COUNTERS(KINCAL_COUNTER_ATOMIC)
+  KINCAL_PIPELINE_COUNTERS(KINCAL_COUNTER_ATOMIC)
 #undef KINCAL_COUNTER_ATOMIC
 
   // The values counted here (components' own counters are added by the caller).

@@ -14,13 +14,14 @@
 #include <optional>
 #include <thread>
 
+#include "daemon/batch_worker.h"
 #include "daemon/bounded_queue.h"
 #include "daemon/capture_stage.h"
 #include "daemon/control_input.h"
 #include "daemon/counters.h"
 #include "daemon/detection_stage.h"
 #include "daemon/drive_link.h"
-#include "daemon/filter_stage.h"
+#include "daemon/filter_setup.h"
 #include "daemon/guidance.h"
 #include "daemon/health.h"
 #include "daemon/path_lock.h"
@@ -43,6 +44,19 @@ constexpr auto kLastControlsWait = std::chrono::milliseconds(200);
 constexpr double kHealthRepeatS = 10.0;
 // Poses held while waiting for their controls: at least this many.
 constexpr int kMinPendingPoses = 256;
+
+// What stops the daemon from opening (a file, the source, a lock, LCM); thrown while it is
+// built and caught in Daemon::Create, never outside this file.
+class StartupError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+template <typename T>
+T OrStartupError(StatusOr<T> v) {
+  if (!v.ok()) throw StartupError(v.status().message());
+  return std::move(v).value();
+}
 
 }  // namespace
 
@@ -96,15 +110,15 @@ struct Daemon::Impl {
   explicit Impl(DaemonConfig c)
       : cfg(std::move(c)),
         sys(MakeSystem(cfg.robot.model, cfg.robot.effects)),
-        vis(LoadVisionSetup(cfg)),
+        vis(OrStartupError(LoadVisionSetup(cfg))),
         drive(MakeDrive(cfg, vis)),
-        source(MakeSource(
+        source(OrStartupError(MakeSource(
             cfg, vis,
             [this](const void* data, size_t n, int64_t utime) { intake.OnMessage(data, n, utime); },
             [this](const std::string& ch, const void* data, size_t n) {
               out.PublishRaw(ch, data, n);
             },
-            drive.get())),
+            drive.get()))),
         caps(source->capabilities()),
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
@@ -200,19 +214,14 @@ struct Daemon::Impl {
   }
 
   void FilterLoop() {
-    FilterPrior prior = ConfiguredPrior(sys, cfg.robot, cfg.file);
-    if (resume) {
-      const int matched = ResumeFrom(sys, *resume, &prior);
-      HoldFixed(sys, cfg.robot.fixed, &prior.mean, &prior.covariance);  // the drawing wins
-      spdlog::info("resumed {} of {} parameters from {} ({} updates)", matched, sys.num_params(),
-                   cfg.checkpoint.resume, resume->update_count);
-    }
+    FilterPrior prior = DaemonPrior(sys, cfg, resume);
     FilterStageOptions options = FilterStageOptionsFrom(cfg);
     options.lossless = caps.lossless;
     options.resumed = resume;
     FilterStage stage(
         sys, std::move(options), std::move(prior),
-        [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters);
+        [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters,
+        std::make_unique<BatchWorker>(/*background=*/!caps.lossless));
     MergeInputs in;
     in.poses = &pose_q;
     in.controls = &control_q;
@@ -324,33 +333,32 @@ struct Daemon::Impl {
 };
 
 Daemon::Daemon(DaemonConfig config) {
-  Validate(config);
+  if (std::string error; !config.IsValid(&error)) throw StartupError("config: " + error);
   impl_ = std::make_unique<Impl>(std::move(config));
   Impl& d = *impl_;
   const DaemonConfig& cfg = d.cfg;
   if (!cfg.checkpoint.resume.empty()) {
     StatusOr<Checkpoint> resume = ReadCheckpoint(cfg.checkpoint.resume);
-    if (!resume.ok()) throw std::runtime_error(resume.status().message());
+    if (!resume.ok()) throw StartupError(resume.status().message());
     d.resume = std::move(resume).value();
     if (d.resume->model != d.sys.model().name()) {
-      throw std::runtime_error(cfg.checkpoint.resume + ": checkpoint is for model '" +
-                               d.resume->model + "', the config says '" +
-                               std::string(d.sys.model().name()) + "'");
+      throw StartupError(cfg.checkpoint.resume + ": checkpoint is for model '" + d.resume->model +
+                         "', the config says '" + std::string(d.sys.model().name()) + "'");
     }
   }
   // Outputs are locked before anything is written: a second daemon on the same path stops
   // here, and an unwritable folder shows now rather than at the first checkpoint.
   if (!cfg.record.path.empty()) {
     if (const Status s = d.record_lock.Acquire(cfg.record.path, "recording"); !s.ok())
-      throw std::runtime_error(s.message());
+      throw StartupError(s.message());
   }
   if (!cfg.checkpoint.path.empty()) {
     if (const Status s = d.checkpoint_lock.Acquire(cfg.checkpoint.path, "checkpoint"); !s.ok())
-      throw std::runtime_error(s.message());
+      throw StartupError(s.message());
   }
   const Status opened =
       d.out.Open(cfg.lcm, cfg.record, static_cast<size_t>(cfg.queues.recorder), d.caps.lossless);
-  if (!opened.ok()) throw std::runtime_error(opened.message());
+  if (!opened.ok()) throw StartupError(opened.message());
   if (!d.caps.carries_controls) {
     d.out.lcm()->subscribeFunction(
         cfg.lcm.controls_channel,
@@ -367,8 +375,8 @@ Daemon::~Daemon() = default;
 
 StatusOr<std::unique_ptr<Daemon>> Daemon::Create(DaemonConfig config) {
   try {
-    return std::make_unique<Daemon>(std::move(config));
-  } catch (const std::exception& e) {
+    return std::unique_ptr<Daemon>(new Daemon(std::move(config)));
+  } catch (const StartupError& e) {
     return Status::Error(e.what());
   }
 }

@@ -4,6 +4,9 @@
 #include <cstring>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <stdexcept>
+
+#include "kincal/text.h"
 
 namespace kincal::daemon {
 
@@ -25,18 +28,25 @@ std::string_view PixelFormatName(PixelFormat f) {
   return "?";
 }
 
-PixelFormat ParsePixelFormat(std::string_view name) {
+StatusOr<PixelFormat> ParsePixelFormat(std::string_view name) {
   if (name == "GREY") return PixelFormat::kGrey;
   if (name == "YUYV") return PixelFormat::kYuyv;
   if (name == "MJPG") return PixelFormat::kMjpeg;
   if (name == "PNG") return PixelFormat::kPng;
   if (name == "BGR3") return PixelFormat::kBgr24;
   if (name == "RGB3") return PixelFormat::kRgb24;
-  throw std::invalid_argument("pixel format '" + std::string(name) +
-                              "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
+  return Status::Error("pixel format '" + Escaped(name) +
+                       "': expected GREY, YUYV, MJPG, PNG, BGR3 or RGB3");
 }
 
 namespace {
+
+// A frame that cannot be decoded (short buffer, bad size, corrupt data); thrown by the
+// decoders below and caught in ToGrey, never outside this file.
+class FrameError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
 
 int Be16(const uint8_t* d) { return static_cast<int>(d[0]) << 8 | d[1]; }
 
@@ -183,16 +193,21 @@ void EncodedToGrey(const Frame& f, cv::Mat* grey) {
 
 }  // namespace
 
-void ToGrey(const Frame& f, cv::Mat* grey) {
+Status ToGrey(const Frame& f, cv::Mat* grey) {
   if (f.width <= 0 || f.height <= 0 || f.width > 16384 || f.height > 16384) {
-    throw FrameError("frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) +
-                     " is out of range");
+    return Status::Error("frame size " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                         " is out of range");
   }
-  if (f.format == PixelFormat::kMjpeg || f.format == PixelFormat::kPng) {
-    EncodedToGrey(f, grey);
-  } else {
-    RawToGrey(f, grey);
+  try {
+    if (f.format == PixelFormat::kMjpeg || f.format == PixelFormat::kPng) {
+      EncodedToGrey(f, grey);
+    } else {
+      RawToGrey(f, grey);
+    }
+  } catch (const FrameError& e) {
+    return Status::Error(e.what());
   }
+  return Status();
 }
 
 void FromGrey(const cv::Mat& grey, Frame* f) {

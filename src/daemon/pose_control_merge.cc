@@ -1,7 +1,7 @@
 #include "daemon/pose_control_merge.h"
 
-#include "daemon/pose_ring.h"
 #include "daemon/sources.h"
+#include "kincal/online/pose_ring.h"
 
 namespace kincal::daemon {
 namespace {

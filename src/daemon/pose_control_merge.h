@@ -7,8 +7,8 @@
 #include <atomic>
 
 #include "daemon/bounded_queue.h"
-#include "daemon/filter_stage.h"
-#include "daemon/samples.h"
+#include "kincal/online/filter_stage.h"
+#include "kincal/online/samples.h"
 
 namespace kincal::daemon {
 

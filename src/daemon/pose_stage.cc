@@ -37,10 +37,8 @@ bool PoseStage::Process(const Frame& f, PoseSample* p, std::string* error) {
   p->device_utime = f.device_utime;
   p->sequence = f.sequence;
   p->arrival_mono_ns = f.arrival_mono_ns;
-  try {
-    ToGrey(f, &grey_);
-  } catch (const FrameError& e) {
-    *error = e.what();
+  if (const Status s = ToGrey(f, &grey_); !s.ok()) {
+    *error = s.message();
     return false;
   }
   if (grey_.cols != vis_.camera.width || grey_.rows != vis_.camera.height) {

@@ -8,10 +8,10 @@
 #include <array>
 #include <string>
 
-#include "daemon/samples.h"
 #include "daemon/sources.h"
 #include "kincal/daemon/config.h"
 #include "kincal/daemon/frame.h"
+#include "kincal/online/samples.h"
 #include "kincal/vision/floor_pose_solver.h"
 #include "kincal/vision/markers.h"
 

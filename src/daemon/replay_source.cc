@@ -81,12 +81,12 @@ class ReplaySource final : public FrameSource {
         ++bad_frames_;
         continue;  // reported through the frame error count, replay goes on
       }
-      try {
-        f->format = ParsePixelFormat(msg_.pixel_format);
-      } catch (const std::invalid_argument&) {
+      const StatusOr<PixelFormat> format = ParsePixelFormat(msg_.pixel_format);
+      if (!format.ok()) {
         ++bad_frames_;
         continue;
       }
+      f->format = format.value();
       f->width = msg_.width;
       f->height = msg_.height;
       f->stride = msg_.stride;

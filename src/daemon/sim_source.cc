@@ -19,10 +19,17 @@
 namespace kincal::daemon {
 namespace {
 
-// A value, or its error as the std::runtime_error the constructor below reports with.
+// A scenario that does not fit the config; thrown by the constructor below and caught in
+// MakeSimSource, never outside this file.
+class ScenarioMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A value, or its error as the ScenarioMismatch the constructor below reports with.
 template <typename T>
 T OrThrow(StatusOr<T> v) {
-  if (!v.ok()) throw std::runtime_error(v.status().message());
+  if (!v.ok()) throw ScenarioMismatch(v.status().message());
   return std::move(v).value();
 }
 
@@ -40,19 +47,19 @@ class SimSource final : public FrameSource {
         rng_(c.sim.seed != 0 ? c.sim.seed : sc_.seed),
         fault_rng_((c.sim.seed != 0 ? c.sim.seed : sc_.seed) ^ 0x9e3779b97f4a7c15ULL) {
     if (sc_.model != c.robot_model) {
-      throw std::runtime_error(c.sim.scenario + ": scenario model '" + sc_.model +
-                               "' differs from robot.model '" + c.robot_model + "' in " +
-                               (c.config_file.empty() ? "the config" : c.config_file));
+      throw ScenarioMismatch(c.sim.scenario + ": scenario model '" + sc_.model +
+                             "' differs from robot.model '" + c.robot_model + "' in " +
+                             (c.config_file.empty() ? "the config" : c.config_file));
     }
     const int nc = truth_.num_controls();
     if (static_cast<int>(sc_.control_low.size()) != nc ||
         static_cast<int>(sc_.control_high.size()) != nc) {
-      throw std::runtime_error(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
-                               " values");
+      throw ScenarioMismatch(c.sim.scenario + ": controls.low/high need " + std::to_string(nc) +
+                             " values");
     }
     p_true_ = OrThrow(ParamsFrom(truth_, sc_.truth, c.sim.scenario + ": truth"));
     if (sc_.profile != "smooth" && sc_.profile != "piecewise")
-      throw std::runtime_error(c.sim.scenario + ": controls.profile must be smooth or piecewise");
+      throw ScenarioMismatch(c.sim.scenario + ": controls.profile must be smooth or piecewise");
     end_ = SecondsToNs(c.sim.duration_s > 0 ? c.sim.duration_s : sc_.duration_s);
     cmd_ = ControlSignal(nc, 0);
     NextChunk();
@@ -307,10 +314,15 @@ class SimSource final : public FrameSource {
 
 }  // namespace
 
-std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& c, const VisionSetup& v,
-                                           ControlIntake controls, NetworkPublish publish,
-                                           DriveLink* drive) {
-  return std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish), drive);
+StatusOr<std::unique_ptr<FrameSource>> MakeSimSource(const SimSourceOptions& c,
+                                                     const VisionSetup& v, ControlIntake controls,
+                                                     NetworkPublish publish, DriveLink* drive) {
+  try {
+    return std::unique_ptr<FrameSource>(
+        std::make_unique<SimSource>(c, v, std::move(controls), std::move(publish), drive));
+  } catch (const ScenarioMismatch& e) {
+    return Status::Error(e.what());
+  }
 }
 
 }  // namespace kincal::daemon

@@ -5,7 +5,7 @@
 
 #include <stdexcept>
 
-#include "daemon/samples.h"
+#include "kincal/online/samples.h"
 #include "kincal/vision/setup_files.h"
 
 namespace kincal::daemon {
@@ -43,9 +43,9 @@ int64_t PipelineUtime(TimeNs mono_ns) {
   return (mono_ns + offset_ns) / 1000;
 }
 
-std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
-                                        ControlIntake controls, NetworkPublish publish,
-                                        DriveLink* drive) {
+StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const VisionSetup& v,
+                                                  ControlIntake controls, NetworkPublish publish,
+                                                  DriveLink* drive) {
   switch (c.source) {
     case SourceKind::kSim:
       return MakeSimSource(
@@ -60,10 +60,10 @@ std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup
     case SourceKind::kLibcamera:
       return MakeLibcameraSource(c.libcamera);
   }
-  return nullptr;  // unreachable: every SourceKind is handled above
+  return Status::Error("unknown source kind");  // unreachable: each is handled above
 }
 
-VisionSetup LoadVisionSetup(const DaemonConfig& c) {
+StatusOr<VisionSetup> LoadVisionSetup(const DaemonConfig& c) {
   VisionSetup v;
   if (c.camera.intrinsics.empty()) {
     v.camera.width = 640;
@@ -72,15 +72,24 @@ VisionSetup LoadVisionSetup(const DaemonConfig& c) {
     v.camera.cx = 319.5;
     v.camera.cy = 239.5;
   } else {
-    v.camera = vision::ReadCameraYaml(c.camera.intrinsics);
+    StatusOr<vision::CameraModel> camera = vision::ReadCameraYaml(c.camera.intrinsics);
+    if (!camera.ok()) return camera.status();
+    v.camera = std::move(camera).value();
   }
-  v.floor = c.camera.floor.empty() ? vision::NadirFloor(c.camera.nadir_height_m)
-                                   : vision::ReadFloorYaml(c.camera.floor);
-  v.layout = vision::ReadTargetLayoutYaml(c.target.layout);
+  if (c.camera.floor.empty()) {
+    v.floor = vision::NadirFloor(c.camera.nadir_height_m);
+  } else {
+    StatusOr<vision::FloorExtrinsics> floor = vision::ReadFloorYaml(c.camera.floor);
+    if (!floor.ok()) return floor.status();
+    v.floor = std::move(floor).value();
+  }
+  StatusOr<vision::TargetLayout> layout = vision::ReadTargetLayoutYaml(c.target.layout);
+  if (!layout.ok()) return layout.status();
+  v.layout = std::move(layout).value();
   v.target_height_m = c.target.height_m;
   if (static_cast<int>(v.layout.markers.size()) > kMaxMarkers) {
-    throw std::runtime_error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) +
-                             " markers per target");
+    return Status::Error(c.target.layout + ": at most " + std::to_string(kMaxMarkers) +
+                         " markers per target");
   }
   return v;
 }

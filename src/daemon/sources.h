@@ -20,7 +20,9 @@ struct VisionSetup {
   vision::TargetLayout layout;
   double target_height_m = 0.0;  // the target plane above the floor
 };
-VisionSetup LoadVisionSetup(const DaemonConfig& c);
+// The camera, floor and target files the config names (defaults where it names none); an
+// error names the file.
+StatusOr<VisionSetup> LoadVisionSetup(const DaemonConfig& c);
 
 // Sources that also carry the robot's controls (simulation, replay) hand each message
 // over as the raw kincal.controls_t bytes with the host time it was received.
@@ -42,9 +44,11 @@ struct SimSourceOptions {
   double drive_pause_s = 0.5;    // guidance.drive_pause_s
 };
 class DriveLink;
-std::unique_ptr<FrameSource> MakeSimSource(const SimSourceOptions& o, const VisionSetup& v,
-                                           ControlIntake controls, NetworkPublish publish,
-                                           DriveLink* drive = nullptr);
+// An error names the scenario file and what does not fit the config.
+StatusOr<std::unique_ptr<FrameSource>> MakeSimSource(const SimSourceOptions& o,
+                                                     const VisionSetup& v, ControlIntake controls,
+                                                     NetworkPublish publish,
+                                                     DriveLink* drive = nullptr);
 // An LCM log written by `kincald --record`: frames on lcm.frame_channel, controls on
 // lcm.controls_channel (other channels are skipped and counted).
 std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
@@ -56,10 +60,11 @@ std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
 
 // The source the config names (source: sim | v4l2 | libcamera | replay). `controls` and
 // `publish` are used by the sources that carry the robot's controls (sim, replay), `drive`
-// by the simulated camera (guidance.drive; null: the scenario's controls).
-std::unique_ptr<FrameSource> MakeSource(const DaemonConfig& c, const VisionSetup& v,
-                                        ControlIntake controls, NetworkPublish publish,
-                                        DriveLink* drive = nullptr);
+// by the simulated camera (guidance.drive; null: the scenario's controls). Devices and
+// files are opened by Start(); the simulated camera's scenario is read here.
+StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const VisionSetup& v,
+                                                  ControlIntake controls, NetworkPublish publish,
+                                                  DriveLink* drive = nullptr);
 
 // The clocks (kincal/time.h):
 //   host realtime   CLOCK_REALTIME now, in us; it steps with NTP (health messages only);

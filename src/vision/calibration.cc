@@ -17,6 +17,16 @@
 namespace kincal::vision {
 namespace {
 
+// Points or views that cannot be calibrated; caught by this file's public functions, never outside
+// it.
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace
+namespace {
+
 // Pixel residual of one board point. Intrinsics: fx fy cx cy k1 k2 p1 p2 k3.
 struct Reprojection {
   Reprojection(const Eigen::Vector3d& X, const Eigen::Vector2d& uv) : X_(X), uv_(uv) {}
@@ -154,9 +164,11 @@ bool DltView(const CalibrationView& v, Eigen::Matrix3d* K, Eigen::Matrix3d* R, E
 
 }  // namespace
 
-std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
+namespace {
+
+std::vector<CalibrationView> ReadCalibrationPointsOrThrow(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw std::runtime_error(path + ": cannot open for reading");
+  if (!in) throw CalibrationError(path + ": cannot open for reading");
   std::string line;
   int n = 0;
   std::map<std::string, CalibrationView> views;
@@ -173,21 +185,21 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
     const std::string where = path + ":" + std::to_string(n);
     if (!header) {
       if (cols.size() != 6 || cols[0] != "view" || cols[1] != "X" || cols[5].substr(0, 1) != "v") {
-        throw std::runtime_error(where + ": expected header 'view,X,Y,Z,u,v', got '" +
-                                 Escaped(line) + "'");
+        throw CalibrationError(where + ": expected header 'view,X,Y,Z,u,v', got '" + Escaped(line) +
+                               "'");
       }
       header = true;
       continue;
     }
     if (cols.size() != 6)
-      throw std::runtime_error(where + ": expected 6 values, found " + std::to_string(cols.size()));
+      throw CalibrationError(where + ": expected 6 values, found " + std::to_string(cols.size()));
     double v[5];
     for (int k = 0; k < 5; ++k) {
       const std::string& tok = cols[static_cast<size_t>(k + 1)];
       const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[k]);
       if (ec != std::errc() || end != tok.data() + tok.size() || !std::isfinite(v[k])) {
-        throw std::runtime_error(where + ": column " + std::to_string(k + 2) +
-                                 ": expected a number, got '" + Escaped(tok) + "'");
+        throw CalibrationError(where + ": column " + std::to_string(k + 2) +
+                               ": expected a number, got '" + Escaped(tok) + "'");
       }
     }
     if (!views.count(cols[0])) {
@@ -197,10 +209,22 @@ std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path) {
     views[cols[0]].object.emplace_back(v[0], v[1], v[2]);
     views[cols[0]].image.emplace_back(v[3], v[4]);
   }
-  if (!header) throw std::runtime_error(path + ": empty file (no header)");
+  if (!header) throw CalibrationError(path + ": empty file (no header)");
   std::vector<CalibrationView> out;
   for (const auto& k : order) out.push_back(views[k]);
   return out;
+}
+
+}  // namespace
+
+StatusOr<std::vector<CalibrationView>> ReadCalibrationPoints(const std::string& path) {
+  try {
+    return ReadCalibrationPointsOrThrow(path);
+  } catch (const CalibrationError& e) {
+    return Status::Error(e.what());
+  } catch (const cv::Exception& e) {
+    return Status::Error(std::string("calibration: ") + e.what());
+  }
 }
 
 namespace {
@@ -276,9 +300,8 @@ CalibrationResult CalibrateFromDlt(const std::vector<CalibrationView>& views,
     Eigen::Matrix3d K, R;
     Eigen::Vector3d t;
     if (!DltView(views[static_cast<size_t>(i)], &K, &R, &t)) {
-      throw std::runtime_error(
-          views[static_cast<size_t>(i)].name +
-          ": degenerate view (the DLT found no camera in front of the points)");
+      throw CalibrationError(views[static_cast<size_t>(i)].name +
+                             ": degenerate view (the DLT found no camera in front of the points)");
     }
     Ksum += K;
     ++used;
@@ -304,8 +327,8 @@ std::vector<CalibrationView> CheckedViews(const std::vector<CalibrationView>& vi
   std::vector<CalibrationView> views = views_in;
   for (auto& v : views) {
     if (v.object.size() < 6 || v.object.size() != v.image.size()) {
-      throw std::runtime_error(v.name + ": at least 6 point pairs are needed, got " +
-                               std::to_string(v.object.size()));
+      throw CalibrationError(v.name + ": at least 6 point pairs are needed, got " +
+                             std::to_string(v.object.size()));
     }
     const double z0 = v.object.front().z();
     bool planar = true;
@@ -318,7 +341,7 @@ std::vector<CalibrationView> CheckedViews(const std::vector<CalibrationView>& vi
         std::ostringstream m;
         m << v.name << ": image point (" << p.x() << ", " << p.y() << ") lies outside the "
           << o.width << "x" << o.height << " image";
-        throw std::runtime_error(m.str());
+        throw CalibrationError(m.str());
       }
     }
   }
@@ -347,7 +370,7 @@ CalibrationResult CalibrateFromHomographies(const std::vector<CalibrationView>& 
   const double beta = std::sqrt(lambda * B11 / (B11 * B22 - B12 * B12));
   const double u0 = -B13 * alpha * alpha / lambda;
   if (!std::isfinite(alpha) || !std::isfinite(beta) || !std::isfinite(u0) || !std::isfinite(v0)) {
-    throw std::runtime_error(
+    throw CalibrationError(
         "calibration: degenerate views (all boards parallel, or too few orientations); tilt the "
         "board differently in each view");
   }
@@ -363,13 +386,15 @@ CalibrationResult CalibrateFromHomographies(const std::vector<CalibrationView>& 
 
 }  // namespace
 
-CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
-                                  const CalibrationOptions& o) {
+namespace {
+
+CalibrationResult CalibrateCameraOrThrow(const std::vector<CalibrationView>& views_in,
+                                         const CalibrationOptions& o) {
   if (o.width <= 0 || o.height <= 0)
-    throw std::runtime_error("calibration: image size must be given (WxH)");
+    throw CalibrationError("calibration: image size must be given (WxH)");
   if (views_in.size() < 3)
-    throw std::runtime_error("calibration: at least 3 views are needed, got " +
-                             std::to_string(views_in.size()));
+    throw CalibrationError("calibration: at least 3 views are needed, got " +
+                           std::to_string(views_in.size()));
   const std::vector<CalibrationView> views = CheckedViews(views_in, o);
   // Non-planar views (3-D rigs): DLT per view gives K, R, t directly; K is their mean.
   auto is_planar = [](const CalibrationView& v) {
@@ -384,6 +409,19 @@ CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views_in,
   }
   if (!dlt_views.empty()) return CalibrateFromDlt(views, dlt_views, o);
   return CalibrateFromHomographies(views, o);
+}
+
+}  // namespace
+
+StatusOr<CalibrationResult> CalibrateCamera(const std::vector<CalibrationView>& views_in,
+                                            const CalibrationOptions& options) {
+  try {
+    return CalibrateCameraOrThrow(views_in, options);
+  } catch (const CalibrationError& e) {
+    return Status::Error(e.what());
+  } catch (const cv::Exception& e) {
+    return Status::Error(std::string("calibration: ") + e.what());
+  }
 }
 
 }  // namespace kincal::vision

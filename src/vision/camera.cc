@@ -16,6 +16,15 @@
 #include "vision/opencv_file.h"
 
 namespace kincal::vision {
+namespace {
+
+// A camera file that cannot be read; caught by this file's public functions, never outside it.
+class CameraFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace
 
 Eigen::Vector2d CameraModel::NormalizedToPixel(const Eigen::Vector2d& n) const {
   const double x = n.x(), y = n.y();
@@ -69,10 +78,10 @@ CameraModel ReadRosCameraInfo(const std::string& path) {
   try {
     n = YAML::LoadFile(path);
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": not YAML (" + e.what() + ")");
+    throw CameraFileError(path + ": not YAML (" + e.what() + ")");
   }
   auto need = [&](const char* key) {
-    if (!n.IsMap() || !n[key]) throw std::runtime_error(path + ": missing key '" + key + "'");
+    if (!n.IsMap() || !n[key]) throw CameraFileError(path + ": missing key '" + key + "'");
     return n[key];
   };
   auto data = [&](const char* key, size_t at_least) {
@@ -80,19 +89,19 @@ CameraModel ReadRosCameraInfo(const std::string& path) {
     try {
       v = need(key)["data"].as<std::vector<double>>();
     } catch (const YAML::Exception&) {
-      throw std::runtime_error(path + ": " + key + ".data: expected a list of numbers");
+      throw CameraFileError(path + ": " + key + ".data: expected a list of numbers");
     }
     if (v.size() < at_least) {
-      throw std::runtime_error(path + ": " + key + ".data: expected at least " +
-                               std::to_string(at_least) + " numbers");
+      throw CameraFileError(path + ": " + key + ".data: expected at least " +
+                            std::to_string(at_least) + " numbers");
     }
     return v;
   };
   if (n.IsMap() && n["distortion_model"]) {
     const auto model = n["distortion_model"].as<std::string>("");
     if (model != "plumb_bob" && model != "rational_polynomial") {
-      throw std::runtime_error(path + ": distortion_model '" + model +
-                               "': expected plumb_bob (or rational_polynomial)");
+      throw CameraFileError(path + ": distortion_model '" + model +
+                            "': expected plumb_bob (or rational_polynomial)");
     }
   }
   const std::vector<double> k = data("camera_matrix", 9), d = data("distortion_coefficients", 4);
@@ -101,7 +110,7 @@ CameraModel ReadRosCameraInfo(const std::string& path) {
     c.width = need("image_width").as<int>();
     c.height = need("image_height").as<int>();
   } catch (const YAML::Exception&) {
-    throw std::runtime_error(path + ": image_width and image_height: expected integers");
+    throw CameraFileError(path + ": image_width and image_height: expected integers");
   }
   c.fx = k[0];
   c.cx = k[2];
@@ -113,7 +122,7 @@ CameraModel ReadRosCameraInfo(const std::string& path) {
   c.p2 = d[3];
   c.k3 = d.size() > 4 ? d[4] : 0.0;
   std::string error;
-  if (!c.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  if (!c.IsValid(&error)) throw CameraFileError(path + ": " + error);
   return c;
 }
 
@@ -128,14 +137,16 @@ bool IsRosCameraInfo(const std::string& path) {
 
 }  // namespace
 
-CameraModel ReadCameraYaml(const std::string& path) {
+namespace {
+
+CameraModel ReadCameraYamlOrThrow(const std::string& path) {
   if (IsRosCameraInfo(path)) return ReadRosCameraInfo(path);
   cv::FileStorage fs;
   if (const Status s = OpenOpenCvFile(path, "camera intrinsics", &fs); !s.ok())
-    throw std::runtime_error(s.message());
+    throw CameraFileError(s.message());
   auto need = [&](const char* key) {
     cv::FileNode n = fs[key];
-    if (n.empty()) throw std::runtime_error(path + ": missing key '" + key + "'");
+    if (n.empty()) throw CameraFileError(path + ": missing key '" + key + "'");
     return n;
   };
   cv::Mat K, D;
@@ -144,7 +155,7 @@ CameraModel ReadCameraYaml(const std::string& path) {
   CameraModel c;
   c.width = static_cast<int>(need("image_width"));
   c.height = static_cast<int>(need("image_height"));
-  if (K.rows != 3 || K.cols != 3) throw std::runtime_error(path + ": camera_matrix must be 3x3");
+  if (K.rows != 3 || K.cols != 3) throw CameraFileError(path + ": camera_matrix must be 3x3");
   K.convertTo(K, CV_64F);
   D.convertTo(D, CV_64F);
   c.fx = K.at<double>(0, 0);
@@ -152,7 +163,7 @@ CameraModel ReadCameraYaml(const std::string& path) {
   c.cx = K.at<double>(0, 2);
   c.cy = K.at<double>(1, 2);
   const int nd = static_cast<int>(D.total());
-  if (nd < 4) throw std::runtime_error(path + ": distortion_coefficients needs at least 4 values");
+  if (nd < 4) throw CameraFileError(path + ": distortion_coefficients needs at least 4 values");
   const double* d = D.ptr<double>();
   c.k1 = d[0];
   c.k2 = d[1];
@@ -160,8 +171,20 @@ CameraModel ReadCameraYaml(const std::string& path) {
   c.p2 = d[3];
   c.k3 = nd > 4 ? d[4] : 0.0;
   std::string error;
-  if (!c.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  if (!c.IsValid(&error)) throw CameraFileError(path + ": " + error);
   return c;
+}
+
+}  // namespace
+
+StatusOr<CameraModel> ReadCameraYaml(const std::string& path) {
+  try {
+    return ReadCameraYamlOrThrow(path);
+  } catch (const CameraFileError& e) {
+    return Status::Error(e.what());
+  } catch (const cv::Exception& e) {
+    return Status::Error(path + ": " + e.what());
+  }
 }
 
 Status WriteCameraYaml(const CameraModel& c, const std::string& path) {

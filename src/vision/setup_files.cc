@@ -9,15 +9,27 @@
 #include "vision/opencv_file.h"
 
 namespace kincal::vision {
+namespace {
+
+// A target or floor file that cannot be read; caught by this file's public functions, never outside
+// it.
+class SetupFileError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace
 
 // Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
-TargetLayout ReadTargetLayoutYaml(const std::string& path) {
+namespace {
+
+TargetLayout ReadTargetLayoutYamlOrThrow(const std::string& path) {
   if (path.empty()) return TargetLayout::Thesis();
   YAML::Node n;
   try {
     n = YAML::LoadFile(path);
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ": " + e.what());
+    throw SetupFileError(path + ": " + e.what());
   }
   TargetLayout t;
   try {
@@ -26,39 +38,53 @@ TargetLayout ReadTargetLayoutYaml(const std::string& path) {
     if (n["dark_on_light"]) t.dark_on_light = n["dark_on_light"].as<bool>();
     if (n["plate_size_m"]) {
       const auto v = n["plate_size_m"].as<std::vector<double>>();
-      if (v.size() != 2) throw std::runtime_error(path + ": plate_size_m needs [width, height]");
+      if (v.size() != 2) throw SetupFileError(path + ": plate_size_m needs [width, height]");
       t.plate_size_m = Eigen::Vector2d(v[0], v[1]);
     }
-    if (!n["markers"]) throw std::runtime_error(path + ": missing key 'markers'");
+    if (!n["markers"]) throw SetupFileError(path + ": missing key 'markers'");
     t.markers.clear();
     for (const auto& m : n["markers"]) {
       const auto v = m.as<std::vector<double>>();
       if (v.size() != 2) {
-        throw std::runtime_error(path + ":" + std::to_string(m.Mark().line + 1) +
-                                 ": a marker is [x, y] in metres");
+        throw SetupFileError(path + ":" + std::to_string(m.Mark().line + 1) +
+                             ": a marker is [x, y] in metres");
       }
       t.markers.emplace_back(v[0], v[1]);
     }
   } catch (const YAML::Exception& e) {
-    throw std::runtime_error(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
+    throw SetupFileError(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }
   std::string error;
-  if (!t.IsValid(&error)) throw std::runtime_error(path + ": " + error);
+  if (!t.IsValid(&error)) throw SetupFileError(path + ": " + error);
   return t;
 }
 
-FloorExtrinsics ReadFloorYaml(const std::string& path) {
+}  // namespace
+
+StatusOr<TargetLayout> ReadTargetLayoutYaml(const std::string& path) {
+  try {
+    return ReadTargetLayoutYamlOrThrow(path);
+  } catch (const SetupFileError& e) {
+    return Status::Error(e.what());
+  } catch (const cv::Exception& e) {
+    return Status::Error(path + ": " + e.what());
+  }
+}
+
+namespace {
+
+FloorExtrinsics ReadFloorYamlOrThrow(const std::string& path) {
   cv::FileStorage fs;
   if (const Status s = OpenOpenCvFile(path, "floor extrinsics", &fs); !s.ok())
-    throw std::runtime_error(s.message());
+    throw SetupFileError(s.message());
   cv::Mat R, t;
   fs["R_cf"] >> R;
   fs["t_cf"] >> t;
   if (R.rows != 3 || R.cols != 3 || R.type() != CV_64F) {
-    throw std::runtime_error(path + ": expected a 3x3 double matrix 'R_cf' (from kincal floorcal)");
+    throw SetupFileError(path + ": expected a 3x3 double matrix 'R_cf' (from kincal floorcal)");
   }
   if (t.total() != 3 || t.type() != CV_64F)
-    throw std::runtime_error(path + ": expected a 3-vector 't_cf'");
+    throw SetupFileError(path + ": expected a 3-vector 't_cf'");
   FloorExtrinsics f;
   for (int i = 0; i < 3; ++i) {
     f.t_cf[i] = t.at<double>(i);
@@ -67,9 +93,21 @@ FloorExtrinsics ReadFloorYaml(const std::string& path) {
   if (!f.R_cf.allFinite() || !f.t_cf.allFinite() ||
       (f.R_cf.transpose() * f.R_cf - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
       f.R_cf.determinant() < 0) {
-    throw std::runtime_error(path + ": R_cf is not a rotation");
+    throw SetupFileError(path + ": R_cf is not a rotation");
   }
   return f;
+}
+
+}  // namespace
+
+StatusOr<FloorExtrinsics> ReadFloorYaml(const std::string& path) {
+  try {
+    return ReadFloorYamlOrThrow(path);
+  } catch (const SetupFileError& e) {
+    return Status::Error(e.what());
+  } catch (const cv::Exception& e) {
+    return Status::Error(path + ": " + e.what());
+  }
 }
 
 FloorExtrinsics NadirFloor(double height_m) {

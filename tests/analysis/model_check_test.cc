@@ -9,8 +9,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <random>
 
-#include "daemon/messages.h"
 #include "kincal/estimation/online_calibrator.h"
+#include "kincal/online/estimate_messages.h"
 #include "kincal/sim/simulator.h"
 
 namespace kincal {
@@ -109,7 +109,7 @@ TEST(ModelCheck, VerdictTravelsAsAnLcmMessage) {
     }
   } sink;
   lcm.subscribe("KINCAL_MODEL_CHECK", &Sink::On, &sink);
-  const model_check_t msg = daemon::ModelCheckMessage(RunOnline(0.1, 3), "unicycle", 123);
+  const model_check_t msg = ModelCheckMessage(RunOnline(0.1, 3), "unicycle", 123);
   ASSERT_EQ(lcm.publish("KINCAL_MODEL_CHECK", &msg), 0);
   ASSERT_GE(lcm.handleTimeout(100), 0);
   ASSERT_EQ(sink.got.size(), 1u);

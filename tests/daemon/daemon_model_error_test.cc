@@ -62,7 +62,8 @@ Replayed SimulateAndReplayScenario(const std::string& name, const std::string& s
   sim.sim.scenario = scenario;
   sim.record.path = TempPath(name + "_sim.lcm");
   if (!std::filesystem::exists(sim.record.path)) {  // a second replay of one run reuses it
-    Daemon d(sim);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(sim).value();
+    Daemon& d = *d_owner;
     EXPECT_EQ(d.Run(), 0);
   }
   DaemonConfig replay = sim;
@@ -76,7 +77,8 @@ Replayed SimulateAndReplayScenario(const std::string& name, const std::string& s
   for (int k = 0; k < replays; ++k) {
     replay.record.path = TempPath(name + (auto_effects ? "_auto" : "_declared") + "_replay" +
                                   std::to_string(k) + ".lcm");
-    Daemon d(replay);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(replay).value();
+    Daemon& d = *d_owner;
     EXPECT_EQ(d.Run(), 0);
     r.counters = d.counters();
     // Every replay publishes the very same parameters (bytes).

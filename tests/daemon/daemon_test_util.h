@@ -26,7 +26,7 @@ using ::kincal::testing::TempPath;
 
 // The shipped simulated robot, on memq://, as fast as possible (lossless).
 inline DaemonConfig SimConfig(double duration_s) {
-  DaemonConfig c = LoadDaemonConfig(kConfigDir + "/kincald_sim.yaml");
+  DaemonConfig c = ReadDaemonConfig(kConfigDir + "/kincald_sim.yaml").value();
   c.lcm.url = "memq://";
   c.sim.speed = 0;
   c.sim.duration_s = duration_s;

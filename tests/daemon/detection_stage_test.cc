@@ -30,7 +30,7 @@ struct Heard {
 
 TEST(DetectionStage, FramesBecomePublishedPosesInOrder) {
   const DaemonConfig c = test_util::SimConfig(1);
-  const VisionSetup vis = LoadVisionSetup(c);
+  const VisionSetup vis = LoadVisionSetup(c).value();
   PoseStage poses(c.pose, c.detector, vis);
   Publisher pub;
   LcmOptions lcm;

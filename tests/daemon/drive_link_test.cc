@@ -172,7 +172,8 @@ struct DriveRun {
 
 DriveRun RunDaemon(DaemonConfig c, const std::string& name) {
   c.record.path = test_util::TempPath(name + ".lcm");
-  Daemon d(c);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+  Daemon& d = *d_owner;
   EXPECT_EQ(d.Run(), 0);
   return {d.Estimate(), d.counters(), TimeToTargets(c.record.path, c)};
 }
@@ -180,7 +181,7 @@ DriveRun RunDaemon(DaemonConfig c, const std::string& name) {
 // The shipped closed loop (config/kincald_sim_drive.yaml): a diffdrive with the actuator
 // lag it has declared, poses at 30 Hz from a camera 2 m up, targets 0.1 % and 3 ms.
 TEST(DriveDaemon, TheSimulatedRobotFollowsThePlanToTheTargetsAndReplaysTheSame) {
-  DaemonConfig c = LoadDaemonConfig(test_util::kConfigDir + "/kincald_sim_drive.yaml");
+  DaemonConfig c = ReadDaemonConfig(test_util::kConfigDir + "/kincald_sim_drive.yaml").value();
   c.lcm.url = "memq://";
   c.sim.speed = 0;
   c.sim.duration_s = 30;
@@ -232,7 +233,7 @@ TEST(DriveDaemon, TheSimulatedRobotFollowsThePlanToTheTargetsAndReplaysTheSame) 
 // within 3 sigma of the truth must not say MODEL_INADEQUATE; and the same robot with its
 // lag hidden (not declared) is still named within 30 s.
 TEST(DriveDaemon, StatusIsHonestOnceTheEstimateIsRightAndAHiddenLagIsStillNamed) {
-  DaemonConfig c = LoadDaemonConfig(test_util::kConfigDir + "/kincald_sim_drive.yaml");
+  DaemonConfig c = ReadDaemonConfig(test_util::kConfigDir + "/kincald_sim_drive.yaml").value();
   c.lcm.url = "memq://";
   c.sim.speed = 0;
   c.sim.duration_s = 30;

@@ -107,7 +107,8 @@ TEST(GuidanceDaemon, ASimulatedRunPublishesAdviceThatGetsEasier) {
   c.guidance.targets = {{"r_l", 3e-5}, {"r_r", 3e-5}, {"d", 3e-4}};
   c.guidance.limits = {{"omega_l", 25.0}, {"omega_r", 25.0}, {"accel", 50.0}};
   c.record.path = test_util::TempPath("guidance.lcm");
-  Daemon d(c);
+  const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+  Daemon& d = *d_owner;
   ASSERT_EQ(d.Run(), 0);
   lcm::LogFile log(c.record.path, "r");
   std::vector<kincal::guidance_t> advice;

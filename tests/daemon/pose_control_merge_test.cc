@@ -4,13 +4,14 @@
 
 #include <thread>
 
-#include "daemon/filter_stage_harness.h"
+#include "daemon/batch_worker.h"
+#include "online/filter_stage_harness.h"
 
 namespace kincal::daemon {
 namespace {
 
-using test_util::StageRun;
-using test_util::StageScenario;
+using online_test::StageRun;
+using online_test::StageScenario;
 
 StageScenario Scenario() {
   StageScenario sc;
@@ -24,15 +25,16 @@ StageScenario Scenario() {
 // controls 50 ms later: in lossless mode the poses must wait for their controls.
 StageRun RunMerged(const StageScenario& sc, bool lossless) {
   const System est = MakeSystem(sc.model, sc.declared);
-  auto samples = test_util::Simulate(sc);
+  auto samples = online_test::Simulate(sc);
   BoundedQueue<PoseSample> poses(samples.poses.size(), FullPolicy::kBlock);
   BoundedQueue<ControlSample> controls(samples.controls.size(), FullPolicy::kBlock);
   std::atomic<bool> controls_done{false}, stop{false};
   StageRun run;
-  CounterSet counters;
+  OnlineCounters counters;
   FilterStage stage(
-      est, test_util::DefaultStageOptions(), test_util::Prior(sc, est),
-      [&](ControlSample* c) { return controls.TryPop(*c); }, test_util::Collect(&run), &counters);
+      est, online_test::DefaultStageOptions(), online_test::Prior(sc, est),
+      [&](ControlSample* c) { return controls.TryPop(*c); }, online_test::Collect(&run), &counters,
+      std::make_unique<BatchWorker>(/*background=*/false));
   MergeInputs in;
   in.poses = &poses;
   in.controls = &controls;
@@ -48,14 +50,14 @@ StageRun RunMerged(const StageScenario& sc, bool lossless) {
   for (auto& c : samples.controls) controls.Push(c);
   controls_done.store(true);
   merge.join();
-  run.counters = counters.Load();
+  run.counters = counters.LoadOnline();
   run.estimate = run.calibration ? *run.calibration : run.filter_estimate;
   return run;
 }
 
 TEST(PoseControlMerge, PosesWaitForTheirControlsAndGiveTheInOrderResult) {
   const StageScenario sc = Scenario();
-  const StageRun in_order = test_util::RunStage(sc, test_util::DefaultStageOptions());
+  const StageRun in_order = online_test::RunStage(sc, online_test::DefaultStageOptions());
   const StageRun merged = RunMerged(sc, /*lossless=*/true);
   ASSERT_FALSE(merged.estimate.names.empty());
   EXPECT_EQ(merged.counters.updates, in_order.counters.updates);

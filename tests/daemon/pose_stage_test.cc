@@ -25,7 +25,7 @@ Scatter MeasureScatter(double configured_sigma_px, double noise_grey,
   DaemonConfig c = test_util::SimConfig(1);
   c.pose.sigma_px = configured_sigma_px;
   c.pose.method = method;
-  const VisionSetup vis = LoadVisionSetup(c);
+  const VisionSetup vis = LoadVisionSetup(c).value();
   PoseStage stage(c.pose, c.detector, vis);
   vision::RenderOptions ro;
   ro.noise_sigma = noise_grey;

@@ -23,13 +23,15 @@ const std::string kGoldenLog = ::kincal::testing::SourceDir() + "/tests/data/gol
 
 TEST(ReplaySource, ReplayOfALogIsLosslessAndCarriesItsControls) {
   DaemonConfig c =
-      LoadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml");
+      ReadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml").value();
   c.source = SourceKind::kReplay;
   c.replay.path = kGoldenLog;
   c.replay.speed = 0;
   Counted n;
   auto src = MakeSource(
-      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr);
+                 c, LoadVisionSetup(c).value(),
+                 [&n](const void*, size_t, int64_t) { ++n.controls; }, nullptr)
+                 .value();
   ASSERT_NE(src, nullptr);
   const SourceCapabilities caps = src->capabilities();
   EXPECT_TRUE(caps.lossless);

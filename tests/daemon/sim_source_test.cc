@@ -23,9 +23,11 @@ TEST(SimSource, SimulatedCameraRendersTheRobotAndPublishesItsControls) {
   DaemonConfig c = SimConfig(2.0);
   Counted n;
   // The source keeps its own copy of the set-up: a temporary is fine.
-  auto src = MakeSource(
-      c, LoadVisionSetup(c), [&n](const void*, size_t, int64_t) { ++n.controls; },
-      [](const std::string&, const void*, size_t) {});
+  auto src =
+      MakeSource(
+          c, LoadVisionSetup(c).value(), [&n](const void*, size_t, int64_t) { ++n.controls; },
+          [](const std::string&, const void*, size_t) {})
+          .value();
   ASSERT_NE(src, nullptr);
   EXPECT_TRUE(src->capabilities().carries_controls);
   EXPECT_TRUE(src->capabilities().lossless);  // sim.speed 0
@@ -48,12 +50,14 @@ SimStream DrainSim(double duration_s, double chunk_s) {
   c.sim.chunk_s = chunk_s;
   SimStream out;
   auto src = MakeSource(
-      c, LoadVisionSetup(c),
-      [&out](const void* data, size_t size, int64_t) {
-        kincal::controls_t m;
-        if (m.decode(data, 0, static_cast<int>(size)) > 0) out.control_utimes.push_back(m.utime);
-      },
-      [](const std::string&, const void*, size_t) {});
+                 c, LoadVisionSetup(c).value(),
+                 [&out](const void* data, size_t size, int64_t) {
+                   kincal::controls_t m;
+                   if (m.decode(data, 0, static_cast<int>(size)) > 0)
+                     out.control_utimes.push_back(m.utime);
+                 },
+                 [](const std::string&, const void*, size_t) {})
+                 .value();
   EXPECT_TRUE(src->Start().ok());
   Frame f;
   std::string error;

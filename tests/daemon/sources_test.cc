@@ -25,7 +25,7 @@ TEST(Sources, V4l2DeviceThatIsNotThereIsAStatusWithErrno) {
   DaemonConfig c = SimConfig(1.0);
   c.source = SourceKind::kV4l2;
   c.v4l2.device = "/dev/kincal-no-such-video";
-  auto src = MakeSource(c, LoadVisionSetup(c), nullptr, nullptr);
+  auto src = MakeSource(c, LoadVisionSetup(c).value(), nullptr, nullptr).value();
   ASSERT_NE(src, nullptr);
   EXPECT_TRUE(src->capabilities().can_reopen);
   EXPECT_FALSE(src->capabilities().carries_controls);

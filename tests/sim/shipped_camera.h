@@ -20,7 +20,8 @@ inline ThesisVision ShippedCamera() {
   v.camera.cy = 239.5;
   v.floor = vision::NadirFloor(2.0);
   v.layout =
-      vision::ReadTargetLayoutYaml(::kincal::testing::SourceDir() + "/config/target_large.yaml");
+      vision::ReadTargetLayoutYaml(::kincal::testing::SourceDir() + "/config/target_large.yaml")
+          .value();
   v.target_height_m = 0.1;
   return v;
 }

@@ -39,7 +39,7 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string path = (dir / "kincal_cam_test.yaml").string();
   ASSERT_TRUE(WriteCameraYaml(TestCamera(), path).ok());
-  const CameraModel c = ReadCameraYaml(path);
+  const CameraModel c = ReadCameraYaml(path).value();
   EXPECT_EQ(c.width, 640);
   EXPECT_DOUBLE_EQ(c.fx, 820);
   EXPECT_DOUBLE_EQ(c.p2, -0.0004);
@@ -54,14 +54,11 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   EXPECT_NEAR(ours.y(), img[0].y, 1e-9);
   const std::string bad = (dir / "kincal_cam_bad.yaml").string();
   std::ofstream(bad) << "%YAML:1.0\n---\nimage_width: 640\n";
-  try {
-    ReadCameraYaml(bad);
-    FAIL();
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
-              std::string::npos)
-        << e.what();
-  }
+  const StatusOr<CameraModel> refused = ReadCameraYaml(bad);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
+            std::string::npos)
+      << refused.status().message();
 }
 
 // Issue 34: both camera files as Windows tools save them (CRLF, a UTF-8 byte-order mark)
@@ -77,7 +74,7 @@ TEST(Camera, CrlfAndByteOrderMarkReadAsPlainText) {
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     const std::string crlf = path + ".crlf.yaml";
     std::ofstream(crlf, std::ios::binary) << ::kincal::testing::WindowsText(text);
-    const CameraModel c = ReadCameraYaml(crlf);
+    const CameraModel c = ReadCameraYaml(crlf).value();
     EXPECT_EQ(c.width, TestCamera().width) << crlf;
     EXPECT_DOUBLE_EQ(c.fx, TestCamera().fx) << crlf;
     EXPECT_DOUBLE_EQ(c.k3, TestCamera().k3) << crlf;
@@ -95,7 +92,7 @@ TEST(Camera, RosCameraInfoYamlRoundTrip) {
                           "rectification_matrix:", "projection_matrix:\n  rows: 3\n  cols: 4"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key << "\n" << text;
   }
-  const CameraModel c = ReadCameraYaml(path);
+  const CameraModel c = ReadCameraYaml(path).value();
   const CameraModel t = TestCamera();
   EXPECT_EQ(c.width, t.width);
   EXPECT_EQ(c.height, t.height);
@@ -112,13 +109,10 @@ TEST(Camera, RosCameraInfoYamlRoundTrip) {
   }
   const std::string fisheye = (dir / "kincal_camera_info_fisheye.yaml").string();
   std::ofstream(fisheye) << std::regex_replace(text, std::regex("plumb_bob"), "equidistant");
-  try {
-    ReadCameraYaml(fisheye);
-    FAIL();
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("distortion_model 'equidistant'"), std::string::npos)
-        << e.what();
-  }
+  const StatusOr<CameraModel> refused = ReadCameraYaml(fisheye);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.status().message().find("distortion_model 'equidistant'"), std::string::npos)
+      << refused.status().message();
 }
 
 }  // namespace

@@ -25,19 +25,14 @@ std::string Write(const std::string& name, const std::string& text) {
 }
 
 // The message of what `f` throws ("" when it does not).
-template <typename F>
-std::string Thrown(F f) {
-  try {
-    f();
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
+template <typename T>
+std::string ErrorOf(const StatusOr<T>& r) {
+  return r.ok() ? "" : r.status().message();
 }
 
 TEST(SetupFiles, TheShippedLargeTargetReadsAsWritten) {
   const TargetLayout t =
-      ReadTargetLayoutYaml(kincal::testing::SourceDir() + "/config/target_large.yaml");
+      ReadTargetLayoutYaml(kincal::testing::SourceDir() + "/config/target_large.yaml").value();
   EXPECT_EQ(t.name, "large");
   EXPECT_DOUBLE_EQ(t.marker_radius_m, 0.024);
   EXPECT_DOUBLE_EQ(t.plate_size_m.x(), 0.36);
@@ -48,7 +43,7 @@ TEST(SetupFiles, TheShippedLargeTargetReadsAsWritten) {
 }
 
 TEST(SetupFiles, NoPathIsTheThesisPlate) {
-  const TargetLayout t = ReadTargetLayoutYaml("");
+  const TargetLayout t = ReadTargetLayoutYaml("").value();
   const TargetLayout thesis = TargetLayout::Thesis();
   ASSERT_EQ(t.markers.size(), thesis.markers.size());
   for (size_t i = 0; i < t.markers.size(); ++i) EXPECT_EQ(t.markers[i], thesis.markers[i]);
@@ -56,20 +51,17 @@ TEST(SetupFiles, NoPathIsTheThesisPlate) {
 
 TEST(SetupFiles, ABadTargetIsRefusedWithItsPathAndLine) {
   const std::string missing = TempPath("no_such_target.yaml");
-  EXPECT_NE(Thrown([&] { ReadTargetLayoutYaml(missing); }).find(missing), std::string::npos);
+  EXPECT_NE(ErrorOf(ReadTargetLayoutYaml(missing)).find(missing), std::string::npos);
   const std::string no_markers = Write("no_markers.yaml", "name: x\nmarker_radius_m: 0.01\n");
-  EXPECT_EQ(Thrown([&] { ReadTargetLayoutYaml(no_markers); }),
-            no_markers + ": missing key 'markers'");
+  EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(no_markers)), no_markers + ": missing key 'markers'");
   const std::string bad_marker =
       Write("bad_marker.yaml", "name: x\nmarkers:\n  - [0.1, 0.2]\n  - [0.1, 0.2, 0.3]\n");
-  EXPECT_EQ(Thrown([&] { ReadTargetLayoutYaml(bad_marker); }),
+  EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(bad_marker)),
             bad_marker + ":4: a marker is [x, y] in metres");
   const std::string not_number = Write("not_number.yaml", "name: x\nmarkers:\n  - [0.1, abc]\n");
-  EXPECT_NE(Thrown([&] { ReadTargetLayoutYaml(not_number); }).find(not_number + ":3:"),
-            std::string::npos);
+  EXPECT_NE(ErrorOf(ReadTargetLayoutYaml(not_number)).find(not_number + ":3:"), std::string::npos);
   const std::string plate = Write("plate.yaml", "plate_size_m: [0.1]\nmarkers: []\n");
-  EXPECT_EQ(Thrown([&] { ReadTargetLayoutYaml(plate); }),
-            plate + ": plate_size_m needs [width, height]");
+  EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(plate)), plate + ": plate_size_m needs [width, height]");
 }
 
 TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
@@ -82,7 +74,7 @@ TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
     cv::FileStorage fs(good, cv::FileStorage::WRITE);
     fs << "R_cf" << R << "t_cf" << t;
   }
-  const FloorExtrinsics f = ReadFloorYaml(good);
+  const FloorExtrinsics f = ReadFloorYaml(good).value();
   EXPECT_NEAR(f.R_cf(1, 0), std::sin(a), 1e-15);
   EXPECT_NEAR(f.t_cf.z(), 1.5, 1e-15);
 
@@ -91,16 +83,16 @@ TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
     cv::FileStorage fs(scaled, cv::FileStorage::WRITE);
     fs << "R_cf" << cv::Mat(2.0 * R) << "t_cf" << t;
   }
-  EXPECT_EQ(Thrown([&] { ReadFloorYaml(scaled); }), scaled + ": R_cf is not a rotation");
+  EXPECT_EQ(ErrorOf(ReadFloorYaml(scaled)), scaled + ": R_cf is not a rotation");
   const std::string short_t = TempPath("floor_short.yaml");
   {
     cv::FileStorage fs(short_t, cv::FileStorage::WRITE);
     const cv::Mat t2 = (cv::Mat_<double>(2, 1) << 0.1, 0.2);
     fs << "R_cf" << R << "t_cf" << t2;
   }
-  EXPECT_EQ(Thrown([&] { ReadFloorYaml(short_t); }), short_t + ": expected a 3-vector 't_cf'");
+  EXPECT_EQ(ErrorOf(ReadFloorYaml(short_t)), short_t + ": expected a 3-vector 't_cf'");
   const std::string missing = TempPath("no_floor.yaml");
-  EXPECT_NE(Thrown([&] { ReadFloorYaml(missing); }).find(missing), std::string::npos);
+  EXPECT_NE(ErrorOf(ReadFloorYaml(missing)).find(missing), std::string::npos);
 }
 
 // Straight down from h: the floor's x is the camera's x, the floor's y the camera's -y,

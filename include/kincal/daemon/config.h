@@ -1,6 +1,6 @@
 // kincald configuration: one struct per YAML section, mapped one to one (config/kincald_*.yaml
-// are the documented examples). LoadDaemonConfig rejects unknown keys and wrong types
-// naming the file and line; Validate() checks values and cross-section consistency.
+// are the documented examples). ReadDaemonConfig rejects unknown keys and wrong types
+// naming the file and line; IsValid() checks values and cross-section consistency.
 // Relative paths in a config file are relative to that file's directory.
 #pragma once
 
@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kincal/daemon/frame.h"
+#include "kincal/online/filter_options.h"
 #include "kincal/status.h"
 #include "kincal/vision/markers.h"
 
@@ -143,22 +144,6 @@ struct RobotOptions {
   bool IsValid(std::string* error) const;
 };
 
-struct FilterOptions {
-  std::string type = "dd2";         // dd2 | ekf | ukf
-  std::vector<double> control_psd;  // per control channel; empty: zeros
-  std::array<double, kPoseDim> pose_psd{0.0, 0.0, 0.0};
-  double max_pose_gap_s = 1.0;      // a longer gap starts a new run (pose reset)
-  double params_rate_hz = 10.0;     // params_t publish rate (0: every update)
-  double control_history_s = 10.0;  // control samples kept behind the filter
-  double gate_nis = 16.27;          // innovation gate (chi^2, 3 dof, 99.9 %); 0: off
-  int divergence_gated = 10;        // this many gated poses in a row: diverged, re-fit by batch
-  double batch_window_s = 8.0;      // poses (and controls) the re-fit uses; <= control_history_s
-  // Add pose process noise while the innovations run larger than predicted (model error),
-  // and take it back when they are normal (kincal/estimation/noise_adaptation.h).
-  bool adaptive_noise = true;
-  bool IsValid(std::string* error) const;
-};
-
 struct QueueOptions {
   int frames = 4;       // capture -> detection (live: drop oldest; --fast: block)
   int poses = 64;       // detection -> filter (live: drop oldest; --fast: block)
@@ -268,11 +253,17 @@ struct DaemonConfig {
   bool IsValid(std::string* error) const;
 };
 
-// Throws std::runtime_error naming file:line and the offending key.
-DaemonConfig LoadDaemonConfig(const std::string& path);
-// The same as a value or a status with that message (what kincald uses).
+// The config file, or an error naming file:line and the offending key. Values and
+// cross-section consistency are DaemonConfig::IsValid's (Daemon::Create checks them).
 StatusOr<DaemonConfig> ReadDaemonConfig(const std::string& path);
-// Throws std::runtime_error("config: " + the IsValid error).
-void Validate(const DaemonConfig& c);
+
+// Every key a config file may hold ("section.key"), in the loaders' order, with its default
+// as YAML writes it (a choice lists its names): what `kincald --config-keys` prints and
+// docs/config_keys.md holds. The loaders are the one list of the keys.
+struct ConfigKey {
+  std::string key;
+  std::string default_value;
+};
+std::vector<ConfigKey> DaemonConfigKeys();
 
 }  // namespace kincal::daemon

@@ -16,47 +16,35 @@
 
 #include "kincal/daemon/config.h"
 #include "kincal/io/checkpoint.h"
+#include "kincal/online/counters.h"
 
 namespace kincal::daemon {
 
-// Every counter kincald keeps, listed once: X(name, meaning). Each is a field of
-// DaemonCounters, of the pipeline's atomic counter set, and of kincal.health_t (lcm/health_t.lcm
-// has a field of the same name for each; the health message is filled from this list).
-#define KINCAL_DAEMON_COUNTERS(X)                                                            \
-  X(frames_captured, "frames the source delivered")                                          \
-  X(frames_dropped_device, "frames the device lost (sequence gaps)")                         \
-  X(frames_dropped_queue, "frames dropped by the full frame queue (live)")                   \
-  X(frames_bad, "undecodable or wrong-sized frames, damaged log stretches")                  \
-  X(frames_out_of_order, "pose time repeated or earlier than the last: not used")            \
-  X(poses_valid, "frames that gave a pose")                                                  \
-  X(poses_invalid, "frames without the target")                                              \
-  X(poses_published, "pose_t messages published")                                            \
-  X(poses_dropped_queue, "poses dropped by the full pose queue (live)")                      \
-  X(poses_gated, "poses that failed the innovation gate: not used")                          \
-  X(poses_downweighted, "poses beyond the gate in a streak: used with a widened covariance") \
-  X(updates, "filter updates")                                                               \
-  X(run_resets, "new runs: a gap between poses longer than filter.max_pose_gap_s")           \
-  X(filter_resets, "divergence: the filter restarted from a batch fit")                      \
-  X(time_resets, "a clock jumped back: new time base, parameters kept")                      \
-  X(discarded_at_reset, "poses and controls still on the old time base after one")           \
-  X(source_restarts, "the device failed and was reopened")                                   \
-  X(effects_added, "effects added online (robot.effects: auto)")                             \
-  X(effects_removed, "effects removed again: a later batch no longer supported them")        \
-  X(batch_runs, "batch calibrations run (calibration.every_s and at shutdown)")              \
-  X(batch_failed, "batch calibrations that failed: the last good one stays")                 \
-  X(filter_recentres, "the filter disagreed with a batch calibration and was re-centred")    \
-  X(batch_shutdown_ms, "wall time at shutdown spent on the last batch calibrations, ms")     \
-  X(controls_received, "control messages accepted")                                          \
-  X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)")   \
-  X(controls_out_of_order, "controls older than the newest one: ignored")                    \
-  X(controls_late, "controls older than the filter's time: applied from then on")            \
-  X(controls_dropped_queue, "controls dropped by the full control queue (live)")             \
-  X(control_clock_steps, "the robot's clock stepped (control_stamp: mapped): new envelope")  \
-  X(log_events_written, "events written to the --record log")                                \
-  X(log_events_lost, "events the recorder dropped (live, its queue full)")                   \
-  X(guidance_skipped_busy, "estimates offered while the guidance worker was busy: skipped")  \
-  X(drive_legs, "guidance.drive: legs the simulated robot drove by the plan")                \
+// Every counter kincald keeps, listed once: X(name, meaning): the pipeline's here, the
+// online estimator's in KINCAL_ONLINE_COUNTERS (kincal/online/counters.h). Each is a field
+// of DaemonCounters, of the pipeline's atomic counter set, and of kincal.health_t
+// (lcm/health_t.lcm has a field of the same name for each; the health message is filled
+// from this list).
+#define KINCAL_PIPELINE_COUNTERS(X)                                                         \
+  X(frames_captured, "frames the source delivered")                                         \
+  X(frames_dropped_device, "frames the device lost (sequence gaps)")                        \
+  X(frames_dropped_queue, "frames dropped by the full frame queue (live)")                  \
+  X(frames_bad, "undecodable or wrong-sized frames, damaged log stretches")                 \
+  X(poses_valid, "frames that gave a pose")                                                 \
+  X(poses_invalid, "frames without the target")                                             \
+  X(poses_published, "pose_t messages published")                                           \
+  X(poses_dropped_queue, "poses dropped by the full pose queue (live)")                     \
+  X(source_restarts, "the device failed and was reopened")                                  \
+  X(controls_received, "control messages accepted")                                         \
+  X(messages_rejected, "control messages rejected (undecodable, wrong model, not finite)")  \
+  X(controls_dropped_queue, "controls dropped by the full control queue (live)")            \
+  X(control_clock_steps, "the robot's clock stepped (control_stamp: mapped): new envelope") \
+  X(log_events_written, "events written to the --record log")                               \
+  X(log_events_lost, "events the recorder dropped (live, its queue full)")                  \
+  X(guidance_skipped_busy, "estimates offered while the guidance worker was busy: skipped") \
+  X(drive_legs, "guidance.drive: legs the simulated robot drove by the plan")               \
   X(drive_legs_failed, "guidance.drive: legs not planned (no estimate, no leg in view)")
+#define KINCAL_DAEMON_COUNTERS(X) KINCAL_PIPELINE_COUNTERS(X) KINCAL_ONLINE_COUNTERS(X)
 
 struct DaemonCounters {
 #define KINCAL_COUNTER_FIELD(name, meaning) int64_t name = 0;
@@ -70,10 +58,9 @@ struct DaemonCounters {
 
 class Daemon {
  public:
-  // Validates the config and opens everything (LCM, log, source, checkpoint); throws
-  // std::runtime_error with a message naming what failed.
-  explicit Daemon(DaemonConfig config);
-  // The same as a value or a status with that message (what kincald uses).
+  // Validates the config and opens everything (the camera, floor and target files, the
+  // source, the checkpoint resumed, the output locks, LCM, the log); an error names what
+  // failed. The only way to make a Daemon.
   static StatusOr<std::unique_ptr<Daemon>> Create(DaemonConfig config);
   ~Daemon();
   Daemon(const Daemon&) = delete;
@@ -94,6 +81,7 @@ class Daemon {
   DaemonCounters counters() const;
 
  private:
+  explicit Daemon(DaemonConfig config);  // throws inside daemon.cc only (Create catches)
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

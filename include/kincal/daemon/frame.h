@@ -11,10 +11,10 @@
 #include <array>
 #include <cstdint>
 #include <opencv2/core.hpp>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
 #include "kincal/time.h"
 #include "kincal/types.h"
 
@@ -24,8 +24,8 @@ namespace kincal::daemon {
 // kRgb24 stores R, G, B (V4L2 RGB3, libcamera BGR888).
 enum class PixelFormat { kGrey, kYuyv, kMjpeg, kPng, kBgr24, kRgb24 };
 std::string_view PixelFormatName(PixelFormat f);  // "GREY", "YUYV", "MJPG", "PNG", "BGR3", "RGB3"
-// Throws std::invalid_argument naming the accepted formats.
-PixelFormat ParsePixelFormat(std::string_view name);
+// An error names the accepted formats.
+StatusOr<PixelFormat> ParsePixelFormat(std::string_view name);
 
 struct Frame {
   std::vector<uint8_t> data;              // capacity is kept when a Frame is reused
@@ -39,13 +39,9 @@ struct Frame {
 };
 
 // Decodes any supported format into an 8-bit grey image. `grey` is reused (no allocation
-// once it has the frame's size; MJPEG and PNG decoding allocate inside OpenCV). Throws
-// FrameError naming the problem (short buffer, bad size, corrupt data).
-class FrameError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-void ToGrey(const Frame& f, cv::Mat* grey);
+// once it has the frame's size; MJPEG and PNG decoding allocate inside OpenCV). An error
+// names the problem (short buffer, bad size, corrupt data).
+Status ToGrey(const Frame& f, cv::Mat* grey);
 // Raw GREY frame from a grey image (copies into f->data).
 void FromGrey(const cv::Mat& grey, Frame* f);
 

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/target.h"
 
@@ -36,12 +37,12 @@ struct CalibrationResult {
   bool sigma_ok = false;
 };
 
-// Throws std::runtime_error naming the view and the problem (too few points, a
-// degenerate view, points outside the image).
-CalibrationResult CalibrateCamera(const std::vector<CalibrationView>& views,
-                                  const CalibrationOptions& options);
+// An error names the view and the problem (too few points, a degenerate view, points
+// outside the image).
+StatusOr<CalibrationResult> CalibrateCamera(const std::vector<CalibrationView>& views,
+                                            const CalibrationOptions& options);
 
 // Reads a points file with header "view,X,Y,Z,u,v" (object m, image px) into views.
-std::vector<CalibrationView> ReadCalibrationPoints(const std::string& path);
+StatusOr<std::vector<CalibrationView>> ReadCalibrationPoints(const std::string& path);
 
 }  // namespace kincal::vision

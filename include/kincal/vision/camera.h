@@ -31,8 +31,8 @@ struct CameraModel {
 
 // OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width,
 // image_height; ROS camera_info YAML (camera_calibration_parsers' format, plumb_bob) is
-// read too. Throws std::runtime_error naming the file and the missing key.
-CameraModel ReadCameraYaml(const std::string& path);
+// read too. An error names the file and the missing or bad key.
+StatusOr<CameraModel> ReadCameraYaml(const std::string& path);
 // Written whole or not at all (kincal/io/output_file.h); an error names the file.
 Status WriteCameraYaml(const CameraModel& cam, const std::string& path);
 // ROS camera_info YAML (camera_calibration_parsers' format): plumb_bob distortion, identity

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "kincal/status.h"
 #include "kincal/vision/pose.h"
 #include "kincal/vision/target.h"
 
@@ -11,10 +12,10 @@ namespace kincal::vision {
 
 // config/target_*.yaml: name, plate_size_m [w, h], marker_radius_m, dark_on_light,
 // markers [[x, y], ...] (m). An empty path gives the thesis plate.
-TargetLayout ReadTargetLayoutYaml(const std::string& path);
+StatusOr<TargetLayout> ReadTargetLayoutYaml(const std::string& path);
 
 // R_cf and t_cf as written by `kincal floorcal`.
-FloorExtrinsics ReadFloorYaml(const std::string& path);
+StatusOr<FloorExtrinsics> ReadFloorYaml(const std::string& path);
 
 // A camera looking straight down from `height_m` above the floor origin: image x along
 // floor x, image y along floor -y.

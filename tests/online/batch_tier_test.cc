@@ -2,13 +2,13 @@
 // of data time, or growth x the span fitted when that is longer) and when their results apply
 // (lossless: at a fixed data time after the start, so that a replay decides the same every time);
 // at shutdown, one more over everything; the fit is analyze's on the same data.
-#include "daemon/batch_tier.h"
+#include "kincal/online/batch_tier.h"
 
 #include <gtest/gtest.h>
 
 #include "analysis/analysis_test_util.h"
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
 // A recording fed to the tier as the filter stage would, up to t_s; the results that
@@ -45,7 +45,8 @@ BatchTierOptions Lossless(bool auto_effects) {
 }
 
 TEST(BatchTier, StartsOnScheduleAndAppliesAtFixedDataTimes) {
-  BatchTier tier(Lossless(true), "unicycle", {}, {{"k_v", 1.0}, {"k_omega", 1.0}}, 2);
+  BatchTier tier(Lossless(true), "unicycle", {}, {{"k_v", 1.0}, {"k_omega", 1.0}}, 2,
+                 std::make_unique<InlineBatchRunner>());
   Fed fed(testing::UnicycleRecording(120.0, {"time_offset"}, {{"delay_s", 0.2}}, 6));
   fed.Until(&tier, 29.9);
   EXPECT_FALSE(tier.running());  // the run spans less than first_s
@@ -95,7 +96,7 @@ TEST(BatchTier, LongRunsSpaceBatchesByAFractionOfTheirSpan) {
   o.first_s = 10.0;
   o.every_s = 10.0;
   o.growth = 0.5;
-  BatchTier tier(o, "unicycle", {}, {}, 2);
+  BatchTier tier(o, "unicycle", {}, {}, 2, std::make_unique<InlineBatchRunner>());
   Fed fed(testing::UnicycleRecording(110.0, {}, {}, 9));
   // Starts at 10, 20 (max(10, 5)), 30 (max(10, 10)), 45, 67.5 and 101.25 s.
   const std::vector<std::pair<double, int>> expected = {
@@ -114,7 +115,7 @@ TEST(BatchTier, LongRunsSpaceBatchesByAFractionOfTheirSpan) {
 // A stop (kincald's SIGTERM): the running batch is cut short, no new one starts while the
 // queues drain, and Finish fits everything.
 TEST(BatchTier, AStopStartsNoNewBatchAndFinishFitsEverything) {
-  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2);
+  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2, std::make_unique<InlineBatchRunner>());
   Fed fed(testing::UnicycleRecording(120.0, {}, {}, 10));
   fed.Until(&tier, 30.1);
   ASSERT_EQ(tier.started(), 1);
@@ -131,7 +132,7 @@ TEST(BatchTier, AStopStartsNoNewBatchAndFinishFitsEverything) {
 }
 
 TEST(BatchTier, WithoutAutoTheDeclaredModelIsFittedAndNothingAccepted) {
-  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2);
+  BatchTier tier(Lossless(false), "unicycle", {}, {}, 2, std::make_unique<InlineBatchRunner>());
   Fed fed(testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 7));
   fed.Until(&tier, 60.0);
   ASSERT_EQ(fed.results.size(), 1u);
@@ -143,7 +144,7 @@ TEST(BatchTier, WithoutAutoTheDeclaredModelIsFittedAndNothingAccepted) {
 TEST(BatchTier, DisabledDoesNothing) {
   BatchTierOptions o = Lossless(false);
   o.enabled = false;
-  BatchTier tier(o, "unicycle", {}, {}, 2);
+  BatchTier tier(o, "unicycle", {}, {}, 2, std::make_unique<InlineBatchRunner>());
   Fed fed(testing::UnicycleRecording(60.0, {}, {}, 8));
   fed.Until(&tier, 60.0);
   EXPECT_TRUE(fed.results.empty());
@@ -222,4 +223,4 @@ TEST(BatchTier, OptionsAreChecked) {
 }
 
 }  // namespace
-}  // namespace kincal::daemon
+}  // namespace kincal

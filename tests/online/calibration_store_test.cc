@@ -2,7 +2,7 @@
 // full, with memory fixed by the options over a six-hour run; the controls in force at
 // every kept pose are the ones the robot had; gaps left by thinning and by a new time base
 // are too long for a prediction window to cross.
-#include "daemon/calibration_store.h"
+#include "kincal/online/calibration_store.h"
 
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <array>
 #include <cmath>
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
 constexpr TimeNs kOrigin = 1'700'000'000'000'000'000;
@@ -140,4 +140,4 @@ TEST(CalibrationStore, OptionsAreChecked) {
 }
 
 }  // namespace
-}  // namespace kincal::daemon
+}  // namespace kincal

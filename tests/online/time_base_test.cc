@@ -1,10 +1,10 @@
 // TimeBase: the rules that decide which poses and controls belong to the filter's time
 // base, checked event by event against what docs/daemon.md states.
-#include "daemon/time_base.h"
+#include "kincal/online/time_base.h"
 
 #include <gtest/gtest.h>
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
 const TimeNs kGap = SecondsToNs(0.5);
@@ -124,4 +124,4 @@ TEST(TimeBase, DecisionsDependOnStampsOnly) {
 }
 
 }  // namespace
-}  // namespace kincal::daemon
+}  // namespace kincal

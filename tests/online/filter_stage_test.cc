@@ -1,4 +1,4 @@
-#include "daemon/filter_stage.h"
+#include "kincal/online/filter_stage.h"
 
 #include <gtest/gtest.h>
 
@@ -6,15 +6,15 @@
 #include <random>
 #include <set>
 
-#include "daemon/filter_stage_harness.h"
 #include "kincal/analysis/analyze.h"
+#include "online/filter_stage_harness.h"
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
-using test_util::DefaultStageOptions;
-using test_util::RunStage;
-using test_util::StageScenario;
+using online_test::DefaultStageOptions;
+using online_test::RunStage;
+using online_test::StageScenario;
 
 StageScenario CleanDiffDrive() {
   StageScenario sc;
@@ -66,12 +66,12 @@ TEST(FilterStage, GatesAnIsolatedOutlierAndIsNotMovedByIt) {
   const auto run = RunStage(sc, DefaultStageOptions());
   EXPECT_EQ(run.counters.poses_gated, clean.counters.poses_gated + 2);
   EXPECT_EQ(run.counters.filter_resets, 0);
-  const auto filter_value = [](const test_util::StageRun& r, const std::string& name) {
+  const auto filter_value = [](const online_test::StageRun& r, const std::string& name) {
     const auto& f = r.filter_estimate;
     const auto it = std::find(f.names.begin(), f.names.end(), name);
     return it == f.names.end() ? std::nan("") : f.values[static_cast<size_t>(it - f.names.begin())];
   };
-  const auto filter_sigma = [](const test_util::StageRun& r, const std::string& name) {
+  const auto filter_sigma = [](const online_test::StageRun& r, const std::string& name) {
     const auto& f = r.filter_estimate;
     const auto k =
         static_cast<int>(std::find(f.names.begin(), f.names.end(), name) - f.names.begin());
@@ -108,7 +108,7 @@ StageScenario HiddenEffect(const std::string& effect, const std::string& param, 
 
 // The candidates of the first model-check message that names effects, and when (s after
 // the first message).
-std::pair<std::string, double> FirstNamed(const test_util::StageRun& run) {
+std::pair<std::string, double> FirstNamed(const online_test::StageRun& run) {
   for (const auto& m : run.checks) {
     if (m.num_candidates > 0) {
       std::string all;
@@ -119,7 +119,7 @@ std::pair<std::string, double> FirstNamed(const test_util::StageRun& run) {
   return {"", -1};
 }
 
-void ExpectModelErrorHandledHonestly(const test_util::StageRun& run) {
+void ExpectModelErrorHandledHonestly(const online_test::StageRun& run) {
   EXPECT_LE(run.counters.filter_resets, 1);
   EXPECT_LT(run.counters.poses_gated, run.counters.updates / 20) << "the gate threw away evidence";
   ASSERT_FALSE(run.params.empty());
@@ -158,7 +158,7 @@ TEST(FilterStageModelError, HiddenDelayIsNotDivergenceAndIsNamed) {
 
 // The value of an effect parameter lands within 10 % of the truth, every parameter within
 // 3 sigma, and the effect was added once.
-void ExpectEffectFoundOnline(const test_util::StageRun& run, const StageScenario& sc,
+void ExpectEffectFoundOnline(const online_test::StageRun& run, const StageScenario& sc,
                              const std::string& effect, const std::string& param) {
   ASSERT_FALSE(run.checks.empty());
   const auto& last = run.checks.back();
@@ -249,7 +249,7 @@ TEST(FilterStageOnlineOffline, DeclaredEffectsAgreeWithAnalyze) {
   o.base_effects = sc.declared;
   o.effects_mode = "none";
   const AnalyzeResult offline =
-      Analyze(test_util::ToRecording(test_util::Simulate(sc), 2), o).value();
+      Analyze(online_test::ToRecording(online_test::Simulate(sc), 2), o).value();
   for (const auto& e : offline.after.params) {
     const double online = run.Final(e.name), sigma = run.FinalSigma(e.name);
     EXPECT_NEAR(online, e.value, std::max(0.05 * std::abs(e.value), 3 * sigma))
@@ -268,12 +268,12 @@ AnalyzeResult Offline(const StageScenario& sc, const std::string& effects_mode) 
   o.effects_mode = effects_mode;
   o.init = sc.guess;
   const int nc = MakeSystem(sc.model).num_controls();
-  return Analyze(test_util::ToRecording(test_util::Simulate(sc), nc), o).value();
+  return Analyze(online_test::ToRecording(online_test::Simulate(sc), nc), o).value();
 }
 
 // The calibration a run ends with equals analyze's within 1 sigma, parameter by parameter,
 // and the last params_t carries it (source batch).
-void ExpectCalibrationIsAnalyze(const test_util::StageRun& run, const FitReport& offline) {
+void ExpectCalibrationIsAnalyze(const online_test::StageRun& run, const FitReport& offline) {
   ASSERT_TRUE(run.calibration.has_value());
   EXPECT_EQ(run.calibration->source, "batch");
   EXPECT_EQ(run.calibration->effects, offline.effects);
@@ -363,14 +363,14 @@ TEST(FilterStageBatch, NotConvergedBeforeTheFirstBatch) {
 TEST(FilterStageBatch, AFailedBatchSaysWhyAndLeavesNoCalibrationInItsPlace) {
   StageScenario sc = CleanDiffDrive();
   sc.duration_s = 100;
-  test_util::Samples samples = test_util::Simulate(sc);
+  online_test::Samples samples = online_test::Simulate(sc);
   const int64_t t0 = samples.poses.front().utime, seen = t0 + 40'000'000;
   std::vector<PoseSample> kept;
   for (const auto& p : samples.poses) {
     if (p.utime >= seen || (p.utime - t0) % 2'000'000 < 34'000) kept.push_back(p);
   }
   samples.poses = kept;
-  const auto run = test_util::RunStageOn(samples, sc, DefaultStageOptions());
+  const auto run = online_test::RunStageOn(samples, sc, DefaultStageOptions());
   ASSERT_GE(run.calibrations.size(), 2u);
   const auto& first = run.calibrations.front();
   EXPECT_EQ(first.ok, 0);
@@ -392,7 +392,7 @@ TEST(FilterStageBatch, AFailedBatchSaysWhyAndLeavesNoCalibrationInItsPlace) {
 TEST(FilterStageBatch, ACalibrationThatExplainsNothingIsFlaggedAndNotFollowed) {
   StageScenario sc = CleanDiffDrive();
   sc.duration_s = 150;
-  test_util::Samples samples = test_util::Simulate(sc);
+  online_test::Samples samples = online_test::Simulate(sc);
   const int64_t lifted = samples.poses.front().utime + 40'000'000;
   Eigen::Vector3d held = Eigen::Vector3d::Zero();
   std::mt19937_64 rng(3);
@@ -404,7 +404,7 @@ TEST(FilterStageBatch, ACalibrationThatExplainsNothingIsFlaggedAndNotFollowed) {
     }
     p.xytheta = held + Eigen::Vector3d(noise(rng), noise(rng), 5 * noise(rng));
   }
-  const auto run = test_util::RunStageOn(samples, sc, DefaultStageOptions());
+  const auto run = online_test::RunStageOn(samples, sc, DefaultStageOptions());
   ASSERT_GE(run.calibrations.size(), 3u);
   EXPECT_EQ(run.calibrations.front().unique, 1) << run.calibrations.front().warnings;
   const auto& last = run.calibrations.back();
@@ -420,4 +420,4 @@ TEST(FilterStageBatch, ACalibrationThatExplainsNothingIsFlaggedAndNotFollowed) {
 }
 
 }  // namespace
-}  // namespace kincal::daemon
+}  // namespace kincal

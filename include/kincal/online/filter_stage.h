@@ -1,8 +1,11 @@
-// The filter stage of kincald: poses and controls in, parameter estimates out. It owns the
+// The online estimator (kincald's filter stage): poses and controls in, parameter estimates
+// out, as kincal's messages (estimate_messages.h). It owns the
 // online calibrator, the model check, the time base and the divergence recovery; the
 // filter thread only decides when a pose may be taken (its controls are in) and hands it
 // over. Single-threaded; times are the pipeline's (ns), converted from the samples' utime
-// once, on entry.
+// once, on entry. Without threads: kincald's filter thread drives it, a test drives it
+// directly (tests/online/filter_stage_harness.h); only its batches may run elsewhere (the
+// BatchRunner it is given).
 //
 //   AddControl  a control sample (time base rules, held jumps, late and reordered ones)
 //   AddPose     a pose: initialise, new run, update or gate, recovery, publish
@@ -25,44 +28,25 @@
 #include <optional>
 #include <string>
 
-#include "daemon/batch_tier.h"
-#include "daemon/counters.h"
-#include "daemon/pose_ring.h"
-#include "daemon/samples.h"
-#include "daemon/time_base.h"
 #include "kincal/analysis/model_check.h"
-#include "kincal/daemon/config.h"
-#include "kincal/daemon/frame.h"
 #include "kincal/estimation/batch.h"
 #include "kincal/estimation/noise_adaptation.h"
 #include "kincal/estimation/online_calibrator.h"
 #include "kincal/io/checkpoint.h"
+#include "kincal/online/batch_tier.h"
+#include "kincal/online/counters.h"
+#include "kincal/online/filter_options.h"
+#include "kincal/online/filter_prior.h"
+#include "kincal/online/pose_ring.h"
+#include "kincal/online/samples.h"
+#include "kincal/online/time_base.h"
 #include "kincal/system.h"
 
 namespace kincal {
 class model_check_t;
-}
 
-namespace kincal::daemon {
-
-// What the stage starts from: parameters and their covariance (the configured guess, or a
-// checkpoint resumed).
-struct FilterPrior {
-  VecN<kMaxState> mean;
-  StateMat covariance;
-};
-// The configured guess, with robot.guess_sigma_fraction of each value (or of the
-// parameter's default sigma, whichever is larger) as its sigma. `file` names the config in
-// errors.
-FilterPrior ConfiguredPrior(const System& sys, const RobotOptions& robot, const std::string& file);
-// Holds robot.fixed: each named parameter at its value with a negligible sigma
-// (kHeldSigmaFraction of its default sigma) and no correlation, so that the filter does not
-// move it.
-void HoldFixed(const System& sys, const std::map<std::string, double>& fixed, VecN<kMaxState>* mean,
-               StateMat* covariance);
-
-// What the filter stage is configured with (from the config's filter, robot, checkpoint
-// sections and the health rate).
+// What the filter stage is configured with (kincald: from the config's filter, robot,
+// checkpoint and calibration sections and the health rate, daemon/filter_setup.h).
 struct FilterStageOptions {
   FilterOptions filter;
   std::vector<std::string> effects;  // declared (for the estimate and checkpoints)
@@ -78,10 +62,6 @@ struct FilterStageOptions {
   bool lossless = false;  // a replay with --fast: online decisions at fixed data times
   bool IsValid(std::string* error) const;
 };
-FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c);
-// Replaces the prior's parameters that a checkpoint has (matched by name; the others keep
-// the configured prior). Returns how many matched.
-int ResumeFrom(const System& sys, const Checkpoint& ck, FilterPrior* prior);
 
 // Where the stage's results go (called on the filter thread).
 struct FilterOutputs {
@@ -101,7 +81,7 @@ class FilterStage {
   // drains it itself, because a clock jump must take exactly the controls queued behind it.
   FilterStage(const System& sys, FilterStageOptions options, FilterPrior prior,
               std::function<bool(ControlSample*)> next_control, FilterOutputs outputs,
-              CounterSet* counters);
+              OnlineCounters* counters, std::unique_ptr<BatchRunner> batch_runner);
   ~FilterStage();
 
   // Takes every queued control until one starts a clock jump (held, see TimeBase).
@@ -171,7 +151,7 @@ class FilterStage {
   OnlineCalibratorOptions calibrator_options_;
   std::function<bool(ControlSample*)> next_control_;
   FilterOutputs out_;
-  CounterSet& counters_;
+  OnlineCounters& counters_;
 
   TimeNs max_gap_ns_, params_every_ns_, check_every_ns_, checkpoint_every_ns_, batch_window_ns_;
   TimeBase time_base_;
@@ -199,4 +179,4 @@ class FilterStage {
   Checkpoint estimate_;
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -8,18 +8,20 @@
 #include <kincal/model_check_t.hpp>
 #include <kincal/params_t.hpp>
 #include <map>
+#include <memory>
 #include <optional>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "daemon/filter_stage.h"
 #include "kincal/io/recording.h"
+#include "kincal/online/batch_calibration.h"
+#include "kincal/online/filter_stage.h"
 #include "kincal/sim/scenario.h"
 #include "kincal/sim/simulator.h"
 #include "test_util.h"
 
-namespace kincal::daemon::test_util {
+namespace kincal::online_test {
 
 // An arbitrary realtime origin, as a live run's stamps would have.
 inline constexpr int64_t kUtimeOrigin = 1'700'000'000'000'000;
@@ -44,7 +46,7 @@ struct StageRun {
   std::vector<kincal::params_t> params;
   std::vector<kincal::model_check_t> checks;
   std::vector<kincal::calibration_t> calibrations;
-  DaemonCounters counters;
+  OnlineCounts counters;
   Checkpoint filter_estimate;             // the filter's last
   std::optional<Checkpoint> calibration;  // the batch calibration in force at the end
   Checkpoint estimate;  // what kincald would checkpoint: the calibration, else the filter's
@@ -124,13 +126,7 @@ inline Recording ToRecording(const Samples& s, int num_controls) {
 }
 
 inline FilterPrior Prior(const StageScenario& sc, const System& est) {
-  RobotOptions robot;
-  robot.model = sc.model;
-  robot.effects = sc.declared;
-  robot.guess = sc.guess;
-  robot.guess_sigma_fraction = sc.guess_sigma_fraction;
-  robot.fixed = sc.fixed;
-  return ConfiguredPrior(est, robot, "test");
+  return GuessedPrior(est, sc.guess, sc.guess_sigma_fraction, sc.fixed, "test");
 }
 
 // Collects what the stage publishes.
@@ -158,7 +154,7 @@ inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
   options.fixed = sc.fixed;
   options.lossless = true;  // one thread feeds the stage: decisions at fixed data times
   StageRun run;
-  CounterSet counters;
+  OnlineCounters counters;
   std::deque<ControlSample> queued;
   FilterStage stage(
       est, options, Prior(sc, est),
@@ -168,7 +164,7 @@ inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
         queued.pop_front();
         return true;
       },
-      Collect(&run), &counters);
+      Collect(&run), &counters, std::make_unique<InlineBatchRunner>());
   size_t next_control = 0;
   for (const PoseSample& p : samples.poses) {
     for (;
@@ -180,7 +176,7 @@ inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
     stage.AddPose(p, 0);
   }
   stage.Finish();
-  run.counters = counters.Load();
+  run.counters = counters.LoadOnline();
   run.estimate = run.calibration ? *run.calibration : run.filter_estimate;
   return run;
 }
@@ -197,4 +193,4 @@ inline FilterStageOptions DefaultStageOptions() {
   return o;
 }
 
-}  // namespace kincal::daemon::test_util
+}  // namespace kincal::online_test

@@ -12,7 +12,7 @@
 #include "kincal/time.h"
 #include "kincal/types.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 // The pipeline's time base from a recorded realtime stamp, and back (exact both ways for
 // the stamps the pipeline makes).
@@ -42,4 +42,4 @@ struct PoseSample {
   std::array<int, kMaxMarkers> id{};
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

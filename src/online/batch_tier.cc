@@ -1,4 +1,4 @@
-#include "daemon/batch_tier.h"
+#include "kincal/online/batch_tier.h"
 
 #include <spdlog/spdlog.h>
 
@@ -8,7 +8,7 @@
 #include <thread>
 #include <vector>
 
-namespace kincal::daemon {
+namespace kincal {
 
 bool BatchTierOptions::IsValid(std::string* error) const {
   if (!(every_s >= 1.0) || !(first_s >= 1.0) || !(apply_after_s >= 0.0)) {
@@ -100,13 +100,14 @@ BatchCalibration FusedWithResumed(const BatchCalibration& r, const Checkpoint& r
 }
 
 BatchTier::BatchTier(BatchTierOptions options, std::string model, std::vector<std::string> declared,
-                     std::map<std::string, double> guess, int num_controls)
+                     std::map<std::string, double> guess, int num_controls,
+                     std::unique_ptr<BatchRunner> runner)
     : opt_(options),
       model_(std::move(model)),
       declared_(std::move(declared)),
       init_(std::move(guess)),
       store_(options.store, num_controls),
-      worker_(/*background=*/!options.lossless),
+      runner_(std::move(runner)),
       next_due_span_ns_(SecondsToNs(options.first_s)) {}
 
 void BatchTier::AddPose(TimeNs t_ns, const Eigen::Vector3d& xytheta) {
@@ -130,7 +131,7 @@ AnalyzeOptions BatchTier::Options() const {
 void BatchTier::StartBatch(TimeNs t_ns) {
   Recording data =
       store_.Snapshot(t_ns, "kincald's run (" + std::to_string(store_.num_poses()) + " poses)");
-  if (worker_.Start(sequence_ + 1, std::move(data), Options())) {
+  if (runner_->Start(sequence_ + 1, std::move(data), Options())) {
     ++sequence_;
     started_span_ns_ = last_span_ns_ = store_.pose_span_ns();
     // Each batch fits the whole span: spacing them by a fraction of it bounds a long
@@ -155,10 +156,10 @@ std::optional<BatchCalibration> BatchTier::OnPose(TimeNs t_ns) {
       // Stopping: the queues drain without waiting; Finish waits for this batch.
       if (!stopping_.load() &&
           store_.pose_span_ns() >= started_span_ns_ + SecondsToNs(opt_.apply_after_s)) {
-        r = worker_.WaitUnlessCancelled();
+        r = runner_->WaitUnlessCancelled();
       }
     } else {
-      r = worker_.Poll();
+      r = runner_->Poll();
     }
     if (r) started_span_ns_ = -1;
     if (r && r->cancelled) {
@@ -177,7 +178,7 @@ std::vector<BatchCalibration> BatchTier::Finish(TimeNs t_ns) {
   std::vector<BatchCalibration> out;
   if (!opt_.enabled || !store_.has_pose()) return out;
   if (running()) {
-    BatchCalibration r = worker_.Wait();
+    BatchCalibration r = runner_->Wait();
     started_span_ns_ = -1;
     if (r.cancelled) {
       last_span_ns_ = -1;  // stopped early (kincald stopping): the batch below replaces it
@@ -190,10 +191,10 @@ std::vector<BatchCalibration> BatchTier::Finish(TimeNs t_ns) {
                store_.span_s());
   StartBatch(t_ns);
   if (running()) {
-    out.push_back(Finished(worker_.Wait()));
+    out.push_back(Finished(runner_->Wait()));
     started_span_ns_ = -1;
   }
   return out;
 }
 
-}  // namespace kincal::daemon
+}  // namespace kincal

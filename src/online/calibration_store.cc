@@ -1,8 +1,8 @@
-#include "daemon/calibration_store.h"
+#include "kincal/online/calibration_store.h"
 
 #include <algorithm>
 
-namespace kincal::daemon {
+namespace kincal {
 namespace {
 
 // Levels beyond this would keep one block in 2^40: never reached by a bounded run.
@@ -159,4 +159,4 @@ Recording CalibrationStore::Snapshot(TimeNs until_ns, const std::string& source)
   return rec;
 }
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -5,9 +5,9 @@
 #include <cstddef>
 #include <vector>
 
-#include "daemon/samples.h"
+#include "kincal/online/samples.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 class PoseRing {
  public:
@@ -32,4 +32,4 @@ class PoseRing {
   size_t head_ = 0, size_ = 0;
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -26,7 +26,7 @@
 #include "kincal/io/recording.h"
 #include "kincal/time.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 struct CalibrationStoreOptions {
   int max_poses = 108'000;     // 1 h at 30 Hz
@@ -94,4 +94,4 @@ class CalibrationStore {
   std::vector<ControlSignal::Values> control_v_;
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

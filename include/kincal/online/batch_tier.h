@@ -2,9 +2,10 @@
 // real-time estimate. The filter stage hands it every control and pose it takes (kept in a
 // bounded CalibrationStore); every `every_s` of data time, or `growth` x the span already
 // fitted when that is longer (the first once the run spans `first_s`) a snapshot of all of it goes
-// to the worker (batch_worker.h), which fits it as `kincal analyze` does: the declared effects as
-// the base, the configured guess as the start and, with robot.effects: auto, analyze's own effect
-// selection on all the data (so an effect a later batch no longer supports is gone again).
+// to its runner (batch_calibration.h: kincald's worker thread, or inline), which fits it as `kincal
+// analyze` does: the declared effects as the base, the configured guess as the start and, with
+// robot.effects: auto, analyze's own effect selection on all the data (so an effect a later batch
+// no longer supports is gone again).
 //
 // When a result is applied: live, at the first pose after it is ready; in a lossless
 // replay, at the first pose `apply_after_s` of data time after the batch started (the
@@ -14,17 +15,18 @@
 
 #include <atomic>
 #include <map>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
-#include "daemon/batch_worker.h"
-#include "daemon/calibration_store.h"
 #include "kincal/io/checkpoint.h"
+#include "kincal/online/batch_calibration.h"
+#include "kincal/online/calibration_store.h"
 #include "kincal/time.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 // One effect the batch tier added to the filter's model, for model_check_t.
 struct AddedEffect {
@@ -42,7 +44,7 @@ struct BatchTierOptions {
   double growth = 0.25;        // and at least growth x the span fitted between batches
   double apply_after_s = 5.0;  // lossless: results applied this long after the start
   // Analyze's threads, 0: one per core (the result does not depend on them). They run
-  // below the pipeline (batch_worker.h), so the frames keep their priority.
+  // below the pipeline (kincald's worker), so the frames keep their priority.
   int threads = 0;
   int max_effects = 4;                  // effects the selection may accept
   std::map<std::string, double> fixed;  // robot.fixed: held (kincal analyze --fix)
@@ -63,8 +65,10 @@ class BatchTier {
  public:
   // `model`, `declared` effects and the configured `guess` (by parameter name) are what
   // `kincal analyze --model M --init GUESS` would be given.
+  // `runner` runs the batches (kincald: its worker thread; without threads: inline).
   BatchTier(BatchTierOptions options, std::string model, std::vector<std::string> declared,
-            std::map<std::string, double> guess, int num_controls);
+            std::map<std::string, double> guess, int num_controls,
+            std::unique_ptr<BatchRunner> runner);
 
   void AddControl(TimeNs t_ns, std::span<const double> values) {
     if (opt_.enabled) store_.AddControl(t_ns, values);
@@ -83,7 +87,7 @@ class BatchTier {
   // drain goes on), and Finish's batch over everything takes its place.
   void CancelRunning() {
     stopping_.store(true);
-    worker_.CancelRunning();
+    runner_->CancelRunning();
   }
 
   bool running() const { return started_span_ns_ >= 0; }
@@ -103,7 +107,7 @@ class BatchTier {
   std::vector<std::string> declared_;
   std::map<std::string, double> init_;
   CalibrationStore store_;
-  BatchWorker worker_;
+  std::unique_ptr<BatchRunner> runner_;
   int sequence_ = 0;
   TimeNs started_span_ns_ = -1;        // the running batch's start (store span), -1: none
   TimeNs last_span_ns_ = -1;           // the last batch's start (store span)
@@ -111,4 +115,4 @@ class BatchTier {
   TimeNs next_due_span_ns_;
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -17,10 +17,10 @@
 #include <limits>
 #include <optional>
 
-#include "daemon/samples.h"
+#include "kincal/online/samples.h"
 #include "kincal/time.h"
 
-namespace kincal::daemon {
+namespace kincal {
 
 class TimeBase {
  public:
@@ -78,4 +78,4 @@ class TimeBase {
   TimeNs held_since_mono_ns_ = 0;
 };
 
-}  // namespace kincal::daemon
+}  // namespace kincal

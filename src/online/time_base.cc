@@ -1,8 +1,8 @@
-#include "daemon/time_base.h"
+#include "kincal/online/time_base.h"
 
 #include <cassert>
 
-namespace kincal::daemon {
+namespace kincal {
 
 bool TimeBase::FromOldBase(TimeNs t, Stream stream) {
   bool& rebased = stream == Stream::kControls ? controls_rebased_ : poses_rebased_;
@@ -30,4 +30,4 @@ ControlSample TimeBase::ReleaseHeld() {
   return c;
 }
 
-}  // namespace kincal::daemon
+}  // namespace kincal

@@ -1,0 +1,57 @@
+// The online estimator as kincald configures it: every option carried from its section,
+// and the prior from robot.guess, the checkpoint resumed and robot.fixed over both.
+#include "daemon/filter_setup.h"
+
+#include <gtest/gtest.h>
+
+namespace kincal::daemon {
+namespace {
+
+TEST(FilterSetup, OptionsComeFromTheirSections) {
+  DaemonConfig c;
+  c.filter.type = "ukf";
+  c.robot.effects = {"time_offset"};
+  c.robot.fixed = {{"d", 0.3}};
+  c.robot.auto_effects = true;
+  c.health_rate_hz = 4;
+  c.checkpoint.path = "ck.json";
+  c.checkpoint.every_s = 7;
+  c.calibration.every_s = 50;
+  c.calibration.first_s = 20;
+  c.calibration.max_poses = 5000;
+  const FilterStageOptions o = FilterStageOptionsFrom(c);
+  EXPECT_EQ(o.filter.type, "ukf");
+  EXPECT_EQ(o.effects, c.robot.effects);
+  EXPECT_EQ(o.fixed, c.robot.fixed);
+  EXPECT_TRUE(o.auto_effects);
+  EXPECT_DOUBLE_EQ(o.model_check_every_s, 0.25);
+  EXPECT_EQ(o.checkpoint_path, "ck.json");
+  EXPECT_DOUBLE_EQ(o.checkpoint_every_s, 7);
+  EXPECT_DOUBLE_EQ(o.calibration.every_s, 50);
+  EXPECT_DOUBLE_EQ(o.calibration.first_s, 20);
+  EXPECT_EQ(o.calibration.store.max_poses, 5000);
+  std::string error;
+  EXPECT_TRUE(o.IsValid(&error)) << error;
+}
+
+TEST(FilterSetup, TheDrawingWinsOverTheCheckpointResumed) {
+  DaemonConfig c;
+  c.robot.guess = {{"d", 0.35}};
+  c.robot.fixed = {{"d", 0.3}};
+  const System sys = MakeSystem("diffdrive", {});
+  const int b = sys.ParamIndex("d"), rl = sys.ParamIndex("r_l");
+  Checkpoint ck;
+  ck.names = {"r_l", "d"};
+  ck.values = {0.052, 0.32};
+  ck.covariance = Eigen::Matrix2d::Identity() * 1e-6;
+  const FilterPrior p = DaemonPrior(sys, c, ck);
+  EXPECT_DOUBLE_EQ(p.mean[rl], 0.052);
+  EXPECT_DOUBLE_EQ(p.covariance(rl, rl), 1e-6);
+  EXPECT_DOUBLE_EQ(p.mean[b], 0.3);
+  EXPECT_LT(p.covariance(b, b), 1e-12);
+  EXPECT_DOUBLE_EQ(DaemonPrior(sys, DaemonConfig{}, std::nullopt).mean[b],
+                   sys.params()[static_cast<size_t>(b)].default_value);
+}
+
+}  // namespace
+}  // namespace kincal::daemon
