@@ -1,9 +1,9 @@
 // Camera frames as they move through kincald: pixel formats, the frame buffer, and
-// decoding any of them to grey. (Poses and controls: src/daemon/samples.h; the source interface:
+// decoding any of them to grey. (Poses and controls: kincal/online/samples.h; the source interface:
 // src/daemon/frame_source.h.)
 //
 // Clocks (docs/daemon.md has the full table):
-//   - `utime`: microseconds on the pipeline clock (LCM convention; src/daemon/samples.h).
+//   - `utime`: microseconds on the pipeline clock (LCM convention; kincal/online/samples.h).
 //   - `*_mono_ns`: CLOCK_MONOTONIC of the daemon host (latency, pacing, timeouts).
 //   - `device_*`: the source's own stamp (V4L2: kernel CLOCK_MONOTONIC of the buffer).
 #pragma once
