@@ -73,8 +73,9 @@ def color(rgba):
     return Color(r=float(rgba[0]), g=float(rgba[1]), b=float(rgba[2]), a=float(rgba[3]))
 
 
-def annotations(m, scale=1):
-    """markers_t as ImageAnnotations on an image `scale` times smaller than the camera's.
+def annotations(m, scale=1, axes=None):
+    """markers_t as ImageAnnotations on an image `scale` times smaller than the camera's, with
+    the target's axes when given (preview_t's: origin, x end, y end in camera pixels).
     Foxglove's pixel origin is the top-left pixel's corner: the centre of pixel u is u + 0.5."""
     from foxglove.messages import (CircleAnnotation, ImageAnnotations, Point2,
                                    PointsAnnotation, PointsAnnotationType, TextAnnotation)
@@ -98,6 +99,12 @@ def annotations(m, scale=1):
         texts.append(TextAnnotation(timestamp=ts, position=Point2(x=cx, y=cy), text=f"target {target}",
                                     font_size=12.0, text_color=color(OUTLINE),
                                     background_color=color((0, 0, 0, 0.5))))
+    if axes:
+        o = Point2(x=(axes[0][0] + 0.5) / scale, y=(axes[0][1] + 0.5) / scale)
+        for (u, v), rgba in zip(axes[1:], (UNASSIGNED, IDENTIFIED)):  # x red, y green
+            points.append(PointsAnnotation(timestamp=ts, type=PointsAnnotationType.LineList,
+                                           points=[o, Point2(x=(u + 0.5) / scale, y=(v + 0.5) / scale)],
+                                           outline_color=color(rgba), thickness=2.0))
     return ImageAnnotations(circles=circles, points=points, texts=texts)
 
 
@@ -156,8 +163,9 @@ class Exporter:
                                  format=m.format), log_time)
         mk = self.markers.get(m.frame_sequence)
         if mk is not None and self.markers_channel is not None:
+            axes = list(zip(m.axes_u, m.axes_v)) if m.num_axes == 3 else None
             self.log("/" + self.markers_channel + "/preview", "ImageAnnotations",
-                     annotations(mk, max(m.scale, 1)), log_time)
+                     annotations(mk, max(m.scale, 1), axes), log_time)
 
     def on_frame_t(self, channel, m, log_time):
         from foxglove.messages import CompressedImage, RawImage

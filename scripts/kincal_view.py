@@ -132,6 +132,8 @@ class Timeline:
                      "height": m.height, "source_width": m.source_width, "source_height": m.source_height})
         if m.num_floor:
             self.floor_seen = [[x, y] for x, y in zip(m.floor_x, m.floor_y)]
+        # The target's origin and axis ends in camera pixels (none: the frame gave no pose).
+        item["axes"] = [[u, v] for u, v in zip(m.axes_u, m.axes_v)] if m.num_axes == 3 else None
         self.previews.append((utime, item))
         self._trim(self.previews, utime)
         if self.history_us is not None:

@@ -48,7 +48,7 @@ def main():
     from kincal import markers_t, pose_t, preview_t
     events = lcm_events(log)
     by_channel = {}
-    markers, valid_poses, previews = {}, 0, 0
+    markers, valid_poses, previews, preview_axes = {}, 0, 0, {}
     for ch, data, t in events:
         by_channel.setdefault(ch, []).append(t)
         if ch == "KINCAL_MARKERS":
@@ -58,6 +58,9 @@ def main():
             valid_poses += pose_t.decode(data).valid
         elif ch == "KINCAL_PREVIEW":
             previews += 1
+            p = preview_t.decode(data)
+            if p.num_axes == 3:
+                preview_axes[(p.utime, p.frame_sequence)] = (p.scale, list(zip(p.axes_u, p.axes_v)))
     assert previews >= 25, f"{previews} previews in 6 s at 5 Hz"
 
     from mcap.reader import make_reader
@@ -102,6 +105,23 @@ def main():
             checked += 1
     if checked < 100:
         failures.append(f"only {checked} annotation messages with markers")
+    # The target's axes on the previews: two lines from the projected origin, x red, y green.
+    with_axes = 0
+    with open(out, "rb") as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _, _, _, a in reader.iter_decoded_messages(topics=["/KINCAL_MARKERS/preview"]):
+            lines = [p for p in a.points if len(p.points) == 2]
+            if not lines:
+                continue
+            with_axes += 1
+            o = lines[0].points[0]
+            if not (lines[0].outline_color.r > 0.8 and lines[1].outline_color.g > 0.8):
+                failures.append("preview axes: x not red or y not green")
+            if not any(abs(o.x - (ax[0][0] + 0.5) / s) < 1e-9 and abs(o.y - (ax[0][1] + 0.5) / s) < 1e-9
+                       for s, ax in preview_axes.values()):
+                failures.append(f"preview axes' origin at ({o.x}, {o.y}): no preview_t projects it there")
+    if with_axes < len(preview_axes) * 0.8 or with_axes == 0:
+        failures.append(f"{with_axes} preview annotations with axes, {len(preview_axes)} previews carry them")
     print(f"annotations checked against the markers: {checked}")
 
     # Bad input: named, nothing written.

@@ -104,7 +104,10 @@ def check_overlay(driver, failures):
       // Eight points on each ring (radius 5): the target's outline may cross two of them.
       const px = d.map(([u, v]) => [0, 1, 2, 3, 4, 5, 6, 7].map((k) => Array.from(x.getImageData(
           Math.round(u + 5 * Math.cos(k * Math.PI / 4)), Math.round(v + 5 * Math.sin(k * Math.PI / 4)), 1, 1).data)));
-      return {s: s, d: d, f: f, px: px, w: c.width, h: c.height};""")
+      const a = window.kincalView.drawnAxes;
+      const mid = a ? [1, 2].map((k) => Array.from(x.getImageData(Math.round((a[0][0] + a[k][0]) / 2),
+          Math.round((a[0][1] + a[k][1]) / 2), 1, 1).data)) : null;
+      return {s: s, d: d, f: f, px: px, w: c.width, h: c.height, axes: a, mid: mid};""")
     s = got["s"]
     p, m = s["preview"], s["markers"]
     if m is None or p is None:
@@ -119,7 +122,29 @@ def check_overlay(driver, failures):
     for (u, v, i), ring in zip(want, got["px"]):
         if sum(ring_colour(rgba[:3], i >= 0) for rgba in ring) < 5:
             failures.append(f"canvas pixels on the ring of marker ({u:.1f}, {v:.1f}): {ring}")
+    check_axes(p, want, got, failures)
     return want
+
+
+def check_axes(p, want, got, failures):
+    """The target's axes drawn from the preview's projection of the pose: the origin among
+    the identified markers, the x axis red and the y axis green at their middles."""
+    identified = [(u, v) for u, v, i in want if i >= 0]
+    if len(identified) < 3:
+        return
+    if not p.get("axes") or not got["axes"]:
+        failures.append("a frame with an identified target but no axes drawn")
+        return
+    drawn = [((u + 0.5) / p["scale"], (v + 0.5) / p["scale"]) for u, v in p["axes"]]
+    if any(abs(a[0] - b[0]) > 1e-6 or abs(a[1] - b[1]) > 1e-6 for a, b in zip(drawn, got["axes"])):
+        failures.append(f"axes drawn at {got['axes']}, published at {drawn}")
+    us, vs = [u for u, _ in identified], [v for _, v in identified]
+    ox, oy = drawn[0]
+    if not (min(us) - 3 <= ox <= max(us) + 3 and min(vs) - 3 <= oy <= max(vs) + 3):
+        failures.append(f"the target's origin drawn at ({ox:.1f}, {oy:.1f}), outside its markers {identified}")
+    (xr, xg, xb, _), (yr, yg, yb, _) = got["mid"]
+    if not (xr > xg + 50 and xr > xb + 40) or not (yg > yr + 50 and yg > yb + 40):
+        failures.append(f"axis colours at their middles: x {got['mid'][0]}, y {got['mid'][1]}")
 
 
 def check_screenshot(driver, want, failures, path):

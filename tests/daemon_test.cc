@@ -14,6 +14,7 @@
 #include <kincal/pose_t.hpp>
 #include <kincal/preview_t.hpp>
 #include <lcm/lcm-cpp.hpp>
+#include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
@@ -216,6 +217,7 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
   lcm::LogFile log(c.record.path, "r");
   std::vector<kincal::preview_t> previews;
   std::set<int64_t> marker_frames;
+  std::map<int64_t, kincal::markers_t> markers;
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
     if (ev->channel == c.lcm.preview_channel) {
       kincal::preview_t m;
@@ -225,6 +227,7 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
       kincal::markers_t m;
       ASSERT_EQ(m.decode(ev->data, 0, ev->datalen), ev->datalen);
       marker_frames.insert(m.frame_sequence);
+      markers[m.frame_sequence] = m;
     }
   }
   // 6 s at 5 Hz (the simulated camera's 30 Hz stamps: every sixth frame).
@@ -244,6 +247,30 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
   ASSERT_EQ(f.num_floor, 32);
   const auto [x_min, x_max] = std::minmax_element(f.floor_x.begin(), f.floor_x.end());
   EXPECT_NEAR(*x_max - *x_min, 640.0 / 500.0 * (2.0 - 0.10), 1e-6);
+  // The target's axes, projected from each frame's pose: the origin among the markers the
+  // detector identified in that frame, each axis 0.1 m long = 500 / 1.9 px per m.
+  int with_axes = 0;
+  for (const auto& p : previews) {
+    const kincal::markers_t& m = markers[p.frame_sequence];
+    std::vector<double> us, vs;
+    for (int i = 0; i < m.num_markers; ++i) {
+      if (m.id[static_cast<size_t>(i)] < 0) continue;
+      us.push_back(m.u[static_cast<size_t>(i)]);
+      vs.push_back(m.v[static_cast<size_t>(i)]);
+    }
+    if (p.num_axes != 3 || us.size() < 3) continue;
+    ++with_axes;
+    EXPECT_GE(p.axes_u[0], *std::min_element(us.begin(), us.end()));
+    EXPECT_LE(p.axes_u[0], *std::max_element(us.begin(), us.end()));
+    EXPECT_GE(p.axes_v[0], *std::min_element(vs.begin(), vs.end()));
+    EXPECT_LE(p.axes_v[0], *std::max_element(vs.begin(), vs.end()));
+    for (int k = 1; k < 3; ++k) {
+      EXPECT_NEAR(std::hypot(p.axes_u[static_cast<size_t>(k)] - p.axes_u[0],
+                             p.axes_v[static_cast<size_t>(k)] - p.axes_v[0]),
+                  0.1 * 500.0 / 1.9, 1e-6);
+    }
+  }
+  EXPECT_GE(with_axes, static_cast<int>(previews.size()) * 8 / 10);
 }
 
 // Reproduces issue 16 (items 5 and 7): two daemons recording to one path both exited 0 and

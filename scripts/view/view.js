@@ -113,6 +113,26 @@ function toCanvas(p, u, v) {
   return [(u + 0.5) / p.scale, (v + 0.5) / p.scale];
 }
 
+// The target's axes (preview_t: its origin and axis ends, projected from the frame's
+// pose): x red, y green.
+function drawAxes(p) {
+  window.kincalView.drawnAxes = null;
+  if (!p.axes) return;
+  const [ox, oy] = toCanvas(p, p.axes[0][0], p.axes[0][1]);
+  const ends = [];
+  [["#f23333", 1], ["#1ad933", 2]].forEach(([colour, k]) => {
+    const [x, y] = toCanvas(p, p.axes[k][0], p.axes[k][1]);
+    ctx.strokeStyle = colour;
+    ctx.lineWidth = 2;
+    ctx.beginPath();
+    ctx.moveTo(ox, oy);
+    ctx.lineTo(x, y);
+    ctx.stroke();
+    ends.push([x, y]);
+  });
+  window.kincalView.drawnAxes = [[ox, oy], ...ends];
+}
+
 function drawOverlay(p, markers, track) {
   if (canvas.width !== p.width || canvas.height !== p.height) {
     canvas.width = p.width;
@@ -146,6 +166,7 @@ function drawOverlay(p, markers, track) {
       ctx.font = "12px sans-serif";
       ctx.fillText(`target ${markers.target_id}`, cx + 6, cy - 6);
     }
+    drawAxes(p);
     for (let i = 0; i < markers.u.length; i++) {
       const [x, y] = toCanvas(p, markers.u[i], markers.v[i]);
       ctx.strokeStyle = markers.id[i] >= 0 ? "#1ad933" : "#f23333";

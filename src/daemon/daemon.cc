@@ -134,7 +134,12 @@ struct Daemon::Impl {
         preview(cfg.preview.enabled
                     ? std::make_unique<PreviewStage>(
                           cfg.preview, cfg.lcm.preview_channel, &out, caps.lossless,
-                          vision::FloorSeen(vis.camera, vis.floor, vis.target_height_m))
+                          vision::FloorSeen(vis.camera, vis.floor, vis.target_height_m),
+                          [this](const Eigen::Vector3d& pose, std::array<Eigen::Vector2d, 3>* px) {
+                            return vision::TargetAxesInImage(vis.camera, vis.floor,
+                                                             vis.target_height_m, pose,
+                                                             kPreviewAxisLengthM, px);
+                          })
                     : nullptr),
         detection(&pose_stage,
                   DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,

@@ -57,8 +57,11 @@ void DetectionStage::Run() {
       latency_window_.Add(ms);
     }
     const int64_t utime = p.utime;
+    const bool has_pose = p.valid;
+    const Eigen::Vector3d pose = p.xytheta;
     out_.Push(p);  // swaps: p holds a recycled sample from here on
-    if (preview_ != nullptr) preview_->Offer(stage_.grey(), utime, f.sequence);
+    if (preview_ != nullptr)
+      preview_->Offer(stage_.grey(), utime, f.sequence, has_pose ? &pose : nullptr);
   }
   out_.Close();
 }

@@ -38,12 +38,14 @@ int PreviewStage::Scale(int source_width, int width) {
 }
 
 PreviewStage::PreviewStage(const PreviewOptions& options, std::string channel, Publisher* publisher,
-                           bool lossless, const std::vector<Eigen::Vector2d>& floor_seen)
+                           bool lossless, const std::vector<Eigen::Vector2d>& floor_seen,
+                           AxesInImage axes)
     : opt_(options),
       channel_(std::move(channel)),
       publisher_(*publisher),
       lossless_(lossless),
-      period_us_(static_cast<int64_t>(std::llround(1e6 / options.rate_hz))) {
+      period_us_(static_cast<int64_t>(std::llround(1e6 / options.rate_hz))),
+      axes_(std::move(axes)) {
   msg_.schema_version = 1;
   msg_.format = "jpeg";
   msg_.num_floor = static_cast<int32_t>(floor_seen.size());
@@ -63,7 +65,8 @@ PreviewStage::~PreviewStage() {
   thread_.join();
 }
 
-void PreviewStage::Offer(const cv::Mat& grey, int64_t utime, int64_t sequence) {
+void PreviewStage::Offer(const cv::Mat& grey, int64_t utime, int64_t sequence,
+                         const Eigen::Vector3d* target) {
   const bool first = next_due_utime_ == INT64_MIN;
   const bool jumped_back = !first && utime < next_due_utime_ - 2 * period_us_;
   // A frame up to an eighth of a period early counts (a 30 Hz camera's stamps are not a
@@ -87,9 +90,23 @@ void PreviewStage::Offer(const cv::Mat& grey, int64_t utime, int64_t sequence) {
     grey.copyTo(shared_);  // no allocation once shared_ has the frame's size
     utime_ = utime;
     sequence_ = sequence;
+    has_target_ = target != nullptr;
+    if (target != nullptr) target_ = *target;
     pending_ = true;
   }
   cv_.notify_one();
+}
+
+void PreviewStage::FillAxes(bool has_target, const Eigen::Vector3d& target) {
+  std::array<Eigen::Vector2d, 3> px;
+  msg_.axis_length_m = kPreviewAxisLengthM;
+  msg_.num_axes = has_target && axes_ && axes_(target, &px) ? 3 : 0;
+  msg_.axes_u.resize(static_cast<size_t>(msg_.num_axes));  // capacity kept: no allocation
+  msg_.axes_v.resize(static_cast<size_t>(msg_.num_axes));
+  for (int k = 0; k < msg_.num_axes; ++k) {
+    msg_.axes_u[static_cast<size_t>(k)] = px[static_cast<size_t>(k)].x();
+    msg_.axes_v[static_cast<size_t>(k)] = px[static_cast<size_t>(k)].y();
+  }
 }
 
 void PreviewStage::Drain() {
@@ -108,6 +125,8 @@ void PreviewStage::Loop() {
     busy_ = true;
     cv::swap(shared_, work_);  // the next Offer copies into the other buffer
     const int64_t utime = utime_, sequence = sequence_;
+    const bool has_target = has_target_;
+    const Eigen::Vector3d target = target_;
     lock.unlock();
     const int k = Scale(work_.cols, opt_.width);
     const cv::Mat cut =
@@ -121,6 +140,7 @@ void PreviewStage::Loop() {
       msg_.scale = k;
       msg_.width = small_.cols;
       msg_.height = small_.rows;
+      FillAxes(has_target, target);
       msg_.size = static_cast<int32_t>(jpeg_.size());
       msg_.data.assign(jpeg_.begin(), jpeg_.end());
       publisher_.Publish(channel_, utime, msg_);

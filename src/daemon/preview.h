@@ -11,9 +11,11 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <kincal/preview_t.hpp>
 #include <mutex>
 #include <opencv2/core.hpp>
@@ -26,18 +28,30 @@
 
 namespace kincal::daemon {
 
+// The target's axes drawn on a preview: each axis this long (m).
+inline constexpr double kPreviewAxisLengthM = 0.1;
+// A pose on the floor (x, y, theta) to the image pixels of the target's origin and axis
+// ends, each kPreviewAxisLengthM long (vision::TargetAxesInImage with kincald's camera);
+// false when they are not in front of the camera.
+using AxesInImage =
+    std::function<bool(const Eigen::Vector3d& xytheta, std::array<Eigen::Vector2d, 3>* px)>;
+
 class PreviewStage {
  public:
-  // `floor_seen`: the floor polygon every preview carries (vision/floor_view.h).
+  // `floor_seen`: the floor polygon every preview carries (vision/floor_view.h); `axes`:
+  // where the target's axes are drawn (empty: never).
   PreviewStage(const PreviewOptions& options, std::string channel, Publisher* publisher,
-               bool lossless = false, const std::vector<Eigen::Vector2d>& floor_seen = {});
+               bool lossless = false, const std::vector<Eigen::Vector2d>& floor_seen = {},
+               AxesInImage axes = {});
   ~PreviewStage();  // stops the worker
   PreviewStage(const PreviewStage&) = delete;
   PreviewStage& operator=(const PreviewStage&) = delete;
 
   // From the detection thread, every frame: takes the image when a preview is due by frame
   // time and the worker is free. Never blocks on the worker.
-  void Offer(const cv::Mat& grey, int64_t utime, int64_t sequence);
+  // `target`: the frame's pose on the floor (null: none).
+  void Offer(const cv::Mat& grey, int64_t utime, int64_t sequence,
+             const Eigen::Vector3d* target = nullptr);
   // Waits until the worker has published what it was given (tests, shutdown).
   void Drain();
 
@@ -49,6 +63,8 @@ class PreviewStage {
 
  private:
   void Loop();
+  // The target's axes into msg_ (none without a pose, or when they are not in view).
+  void FillAxes(bool has_target, const Eigen::Vector3d& target);
 
   const PreviewOptions opt_;
   const std::string channel_;
@@ -61,6 +77,9 @@ class PreviewStage {
   bool pending_ = false, busy_ = false, stop_ = false;
   cv::Mat shared_;  // the handed-over image (guarded by mu_)
   int64_t utime_ = 0, sequence_ = 0;
+  bool has_target_ = false;
+  Eigen::Vector3d target_ = Eigen::Vector3d::Zero();
+  const AxesInImage axes_;
   cv::Mat work_, half_a_, half_b_, small_;  // worker thread only
   std::vector<uint8_t> jpeg_;
   kincal::preview_t msg_{};

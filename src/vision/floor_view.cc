@@ -1,6 +1,7 @@
 #include "kincal/vision/floor_view.h"
 
 #include <Eigen/Dense>
+#include <cmath>
 
 namespace kincal::vision {
 namespace {
@@ -37,6 +38,21 @@ std::vector<Eigen::Vector2d> FloorSeen(const CameraModel& camera, const FloorExt
     }
   }
   return out;
+}
+
+bool TargetAxesInImage(const CameraModel& camera, const FloorExtrinsics& floor, double height_m,
+                       const Eigen::Vector3d& xytheta, double length_m,
+                       std::array<Eigen::Vector2d, 3>* px) {
+  const double c = std::cos(xytheta.z()), s = std::sin(xytheta.z());
+  const Eigen::Vector3d origin(xytheta.x(), xytheta.y(), height_m);
+  const Eigen::Vector3d points[3] = {origin, origin + length_m * Eigen::Vector3d(c, s, 0.0),
+                                     origin + length_m * Eigen::Vector3d(-s, c, 0.0)};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d in_camera = floor.R_cf * points[k] + floor.t_cf;
+    if (!(in_camera.z() > 1e-9)) return false;
+    (*px)[static_cast<size_t>(k)] = camera.Project(in_camera);
+  }
+  return true;
 }
 
 }  // namespace kincal::vision

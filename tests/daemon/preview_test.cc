@@ -155,5 +155,42 @@ TEST(Preview, LiveNeverWaitsAndCountsWhatItSkips) {
   EXPECT_GE(preview.published(), 1);
 }
 
+// The target's axes travel with the preview: projected from the pose offered with the
+// frame (here by a stand-in projection: origin at (x, y) px, the ends 10 px along u and v),
+// none for a frame without a pose.
+TEST(Preview, ThePosesAxesTravelWithThePreview) {
+  Publisher pub;
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
+  Heard heard;
+  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  PreviewOptions o;
+  o.rate_hz = 5;
+  {
+    PreviewStage preview(o, "PREVIEW", &pub, /*lossless=*/true, {},
+                         [](const Eigen::Vector3d& pose, std::array<Eigen::Vector2d, 3>* px) {
+                           const Eigen::Vector2d at = pose.head<2>();
+                           *px = {at, at + Eigen::Vector2d(10, 0), at + Eigen::Vector2d(0, 10)};
+                           return pose.z() >= 0;  // "behind the camera" otherwise
+                         });
+    const cv::Mat scene = Scene(700.0, 300.0);
+    const Eigen::Vector3d seen(640.0, 480.0, 0.0), behind(1.0, 1.0, -1.0);
+    preview.Offer(scene, 1'000'000, 0, &seen);
+    preview.Offer(scene, 1'200'000, 1);
+    preview.Offer(scene, 1'400'000, 2, &behind);
+    preview.Drain();
+  }
+  while (pub.lcm()->handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(heard.frames.size(), 3u);
+  const kincal::preview_t& f = heard.frames[0];
+  ASSERT_EQ(f.num_axes, 3);
+  EXPECT_EQ(f.axes_u, (std::vector<double>{640.0, 650.0, 640.0}));
+  EXPECT_EQ(f.axes_v, (std::vector<double>{480.0, 480.0, 490.0}));
+  EXPECT_DOUBLE_EQ(f.axis_length_m, kPreviewAxisLengthM);
+  EXPECT_EQ(heard.frames[1].num_axes, 0);
+  EXPECT_TRUE(heard.frames[1].axes_u.empty());
+  EXPECT_EQ(heard.frames[2].num_axes, 0);
+}
+
 }  // namespace
 }  // namespace kincal::daemon

@@ -62,5 +62,27 @@ TEST(FloorView, RaysAboveTheHorizonAreLeftOut) {
   EXPECT_TRUE(FloorSeen(Camera640(), sky, 0.0, 8).empty());
 }
 
+// The target's axes by hand for a nadir camera 2 m up (depth 1.95 m to the target plane):
+// the origin, the x axis along image +u at theta 0 and along image -v at theta pi/2, the y
+// axis along image -v; a target above the camera is not in front of it.
+TEST(FloorView, TheTargetsAxesProjectIntoTheImage) {
+  const CameraModel c = Camera640();
+  std::array<Eigen::Vector2d, 3> px;
+  ASSERT_TRUE(TargetAxesInImage(c, Nadir(2.0), 0.05, Eigen::Vector3d(0.2, 0.1, 0.0), 0.1, &px));
+  const double k = 500.0 / 1.95;
+  EXPECT_NEAR(px[0].x(), 319.5 + 0.2 * k, 1e-9);
+  EXPECT_NEAR(px[0].y(), 239.5 - 0.1 * k, 1e-9);
+  EXPECT_NEAR(px[1].x() - px[0].x(), 0.1 * k, 1e-9);
+  EXPECT_NEAR(px[1].y() - px[0].y(), 0.0, 1e-9);
+  EXPECT_NEAR(px[2].x() - px[0].x(), 0.0, 1e-9);
+  EXPECT_NEAR(px[2].y() - px[0].y(), -0.1 * k, 1e-9);
+  ASSERT_TRUE(
+      TargetAxesInImage(c, Nadir(2.0), 0.05, Eigen::Vector3d(0.2, 0.1, M_PI / 2), 0.1, &px));
+  EXPECT_NEAR(px[1].x() - px[0].x(), 0.0, 1e-9);
+  EXPECT_NEAR(px[1].y() - px[0].y(), -0.1 * k, 1e-9);
+  EXPECT_NEAR(px[2].x() - px[0].x(), -0.1 * k, 1e-9);
+  EXPECT_FALSE(TargetAxesInImage(c, Nadir(2.0), 2.5, Eigen::Vector3d::Zero(), 0.1, &px));
+}
+
 }  // namespace
 }  // namespace kincal::vision
