@@ -1,11 +1,5 @@
 #include "daemon/batch_worker.h"
 
-#include <algorithm>
-#include <chrono>
-#include <cmath>
-#include <sstream>
-#include <stdexcept>
-
 #include "daemon/background_thread.h"
 
 namespace kincal::daemon {
