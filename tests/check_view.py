@@ -271,7 +271,11 @@ def recording(kincal, log, work, failures):
             failures.append(f"at a quarter of the run the page shows frame "
                             f"{s['preview'] and s['preview']['frame_sequence']} (end {seq_end}) and params to "
                             f"{s['params'][-1]['t'] if s['params'] else None} s")
-        time.sleep(0.5)  # drawn; paused, so the picture stays: the screenshot matches the state
+        # Paused, so the picture stays once drawn (its image decodes asynchronously: slower
+        # under the sanitizers' load than any fixed wait): the screenshot matches the state.
+        wait_for(driver, "const s = window.kincalView.lastState(); "
+                 "return s.preview && window.kincalView.drawnFrame === s.preview.frame_sequence", 20,
+                 "the paused picture to be drawn")
         want = check_overlay(driver, failures)
         if not want:
             failures.append("log: no markers drawn on the paused picture")

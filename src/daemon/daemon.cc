@@ -1,7 +1,7 @@
 // kincald's pipeline: the threads and how they are wired. The stages live in their own
 // files: the sources (*_source.cc, chosen by MakeSource), the pose stage (pose_stage.cc),
-// the filter stage (filter_stage.cc, with its time base), the LCM messages (messages.cc),
-// health (health.cc) and the recorder (recorder.cc).
+// the online estimator the filter thread drives (src/online/, set up by filter_setup.cc),
+// the LCM messages (messages.cc), health (health.cc) and the recorder (recorder.cc).
 #include "kincal/daemon/daemon.h"
 
 #include <spdlog/spdlog.h>
@@ -31,7 +31,6 @@
 #include "daemon/sources.h"
 #include "kincal/sim/scenario.h"
 #include "kincal/system.h"
-#include "kincal/vision/floor_view.h"
 
 namespace kincal::daemon {
 namespace {
@@ -40,8 +39,6 @@ using Clock = std::chrono::steady_clock;
 
 // After a simulated robot's frames end, the last controls it published over LCM arrive.
 constexpr auto kLastControlsWait = std::chrono::milliseconds(200);
-// A standing health problem is logged again this often.
-constexpr double kHealthRepeatS = 10.0;
 // Poses held while waiting for their controls: at least this many.
 constexpr int kMinPendingPoses = 256;
 
@@ -104,14 +101,12 @@ struct Daemon::Impl {
   PathLock record_lock, checkpoint_lock;  // held for the daemon's life
   HealthReporter health;
   std::unique_ptr<Guidance> guidance;  // guidance.enabled; after `out`: stopped before it
-  std::string logged_health;           // main thread only
-  TimeNs logged_health_at = 0;
 
   explicit Impl(DaemonConfig c)
       : cfg(std::move(c)),
         sys(MakeSystem(cfg.robot.model, cfg.robot.effects)),
         vis(OrStartupError(LoadVisionSetup(cfg))),
-        drive(MakeDrive(cfg, vis)),
+        drive(MakeDriveLink(cfg, vis)),
         source(OrStartupError(MakeSource(
             cfg, vis,
             [this](const void* data, size_t n, int64_t utime) { intake.OnMessage(data, n, utime); },
@@ -131,16 +126,7 @@ struct Daemon::Impl {
                            cfg.record.frame_encoding},
             &out, &frame_q, &counters, [this](const std::string& e) { SetSourceError(e); })),
         pose_stage(cfg.pose, cfg.detector, vis),
-        preview(cfg.preview.enabled
-                    ? std::make_unique<PreviewStage>(
-                          cfg.preview, cfg.lcm.preview_channel, &out, caps.lossless,
-                          vision::FloorSeen(vis.camera, vis.floor, vis.target_height_m),
-                          [this](const Eigen::Vector3d& pose, std::array<Eigen::Vector2d, 3>* px) {
-                            return vision::TargetAxesInImage(vis.camera, vis.floor,
-                                                             vis.target_height_m, pose,
-                                                             kPreviewAxisLengthM, px);
-                          })
-                    : nullptr),
+        preview(MakePreviewStage(cfg, vis, &out, caps.lossless)),
         detection(&pose_stage,
                   DetectionOptions{cfg.lcm.pose_channel, cfg.lcm.markers_channel,
                                    cfg.lcm.publish_markers, cfg.pose.sigma_px},
@@ -151,13 +137,6 @@ struct Daemon::Impl {
                                               out.Publish(cfg.lcm.guidance_channel, utime, m);
                                             });
     }
-  }
-
-  static std::unique_ptr<DriveLink> MakeDrive(const DaemonConfig& c, const VisionSetup& v) {
-    if (!c.guidance.drive) return nullptr;
-    return std::make_unique<DriveLink>(
-        c.guidance,
-        MakeCameraView(v.camera, v.floor, v.layout, v.target_height_m, c.sim.margin_px));
   }
 
   // Live: fresh data matters more than old (drop the oldest); lossless: block.
@@ -306,15 +285,7 @@ struct Daemon::Impl {
     s.filter_status = filter_status;
     health.Build(Snapshot(), s, period_s, RealtimeUtime(), &h);
     out.Publish(cfg.lcm.health_channel, h.utime, h);
-    // Logged when it changes, and every kHealthRepeatS while it stands (it is published at
-    // health_rate_hz regardless).
-    const TimeNs now = MonotonicNs();
-    if (h.message != logged_health || now - logged_health_at > SecondsToNs(kHealthRepeatS)) {
-      if (!h.message.empty()) spdlog::warn("health: {}", h.message);
-      if (h.message.empty() && !logged_health.empty()) spdlog::info("health: ok");
-      logged_health = h.message;
-      logged_health_at = now;
-    }
+    (void)health.Log(h.message, MonotonicNs());
   }
 
   // Every counter: the pipeline's own, and those the components keep.
@@ -342,15 +313,7 @@ Daemon::Daemon(DaemonConfig config) {
   impl_ = std::make_unique<Impl>(std::move(config));
   Impl& d = *impl_;
   const DaemonConfig& cfg = d.cfg;
-  if (!cfg.checkpoint.resume.empty()) {
-    StatusOr<Checkpoint> resume = ReadCheckpoint(cfg.checkpoint.resume);
-    if (!resume.ok()) throw StartupError(resume.status().message());
-    d.resume = std::move(resume).value();
-    if (d.resume->model != d.sys.model().name()) {
-      throw StartupError(cfg.checkpoint.resume + ": checkpoint is for model '" + d.resume->model +
-                         "', the config says '" + std::string(d.sys.model().name()) + "'");
-    }
-  }
+  d.resume = OrStartupError(ReadResumed(cfg, d.sys));
   // Outputs are locked before anything is written: a second daemon on the same path stops
   // here, and an unwritable folder shows now rather than at the first checkpoint.
   if (!cfg.record.path.empty()) {

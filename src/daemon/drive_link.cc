@@ -79,4 +79,10 @@ int64_t DriveLink::legs_failed() const {
   return failed_;
 }
 
+std::unique_ptr<DriveLink> MakeDriveLink(const DaemonConfig& c, const VisionSetup& v) {
+  if (!c.guidance.drive) return nullptr;
+  return std::make_unique<DriveLink>(
+      c.guidance, MakeCameraView(v.camera, v.floor, v.layout, v.target_height_m, c.sim.margin_px));
+}
+
 }  // namespace kincal::daemon

@@ -18,6 +18,7 @@
 #include <mutex>
 #include <optional>
 
+#include "daemon/sources.h"
 #include "kincal/control_signal.h"
 #include "kincal/daemon/config.h"
 #include "kincal/io/checkpoint.h"
@@ -65,5 +66,9 @@ class DriveLink {
   bool cancelled_ = false;
   int64_t legs_ = 0, failed_ = 0;
 };
+
+// kincald's link (null unless guidance.drive): legs planned inside the view of the camera
+// and floor calibration in `v`, sim.margin_px from the image edge.
+std::unique_ptr<DriveLink> MakeDriveLink(const DaemonConfig& c, const VisionSetup& v);
 
 }  // namespace kincal::daemon

@@ -25,6 +25,17 @@ FilterStageOptions FilterStageOptionsFrom(const DaemonConfig& c) {
   return o;
 }
 
+StatusOr<std::optional<Checkpoint>> ReadResumed(const DaemonConfig& c, const System& sys) {
+  if (c.checkpoint.resume.empty()) return std::optional<Checkpoint>();
+  StatusOr<Checkpoint> resume = ReadCheckpoint(c.checkpoint.resume);
+  if (!resume.ok()) return resume.status();
+  if (resume->model != sys.model().name()) {
+    return Status::Error(c.checkpoint.resume + ": checkpoint is for model '" + resume->model +
+                         "', the config says '" + std::string(sys.model().name()) + "'");
+  }
+  return std::optional<Checkpoint>(std::move(resume).value());
+}
+
 FilterPrior DaemonPrior(const System& sys, const DaemonConfig& c,
                         const std::optional<Checkpoint>& resume) {
   FilterPrior prior = GuessedPrior(sys, c.robot.guess, c.robot.guess_sigma_fraction, c.robot.fixed,

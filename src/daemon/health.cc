@@ -119,4 +119,14 @@ void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, dou
   prev_ = now;
 }
 
+bool HealthReporter::Log(const std::string& message, TimeNs now_mono_ns) {
+  if (message == logged_ && now_mono_ns - logged_at_ns_ <= kRepeatNs) return false;
+  const bool cleared = message.empty() && !logged_.empty();
+  if (!message.empty()) spdlog::warn("health: {}", message);
+  if (cleared) spdlog::info("health: ok");
+  logged_ = message;
+  logged_at_ns_ = now_mono_ns;
+  return !message.empty() || cleared;
+}
+
 }  // namespace kincal::daemon

@@ -39,9 +39,17 @@ class HealthReporter {
   // The message for the period since the previous call (`period_s` long).
   void Build(const DaemonCounters& now, const HealthStatus& status, double period_s, int64_t utime,
              kincal::health_t* h);
+  // Logs a message's account when it changes, and every kRepeatNs while it stands (the
+  // message is published at health_rate_hz regardless); "health: ok" once it clears. True
+  // when it logged.
+  bool Log(const std::string& message, TimeNs now_mono_ns);
+
+  static constexpr TimeNs kRepeatNs = 10 * kNsPerSecond;
 
  private:
   DaemonCounters prev_;
+  std::string logged_;  // the account last logged
+  TimeNs logged_at_ns_ = 0;
 };
 
 }  // namespace kincal::daemon

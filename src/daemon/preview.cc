@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "daemon/background_thread.h"
+#include "kincal/vision/floor_view.h"
 
 namespace kincal::daemon {
 namespace {
@@ -150,6 +151,19 @@ void PreviewStage::Loop() {
     busy_ = false;
     cv_.notify_all();
   }
+}
+
+std::unique_ptr<PreviewStage> MakePreviewStage(const DaemonConfig& c, const VisionSetup& v,
+                                               Publisher* publisher, bool lossless) {
+  if (!c.preview.enabled) return nullptr;
+  // `v` outlives the stage (kincald keeps both for its life): captured by reference.
+  return std::make_unique<PreviewStage>(
+      c.preview, c.lcm.preview_channel, publisher, lossless,
+      vision::FloorSeen(v.camera, v.floor, v.target_height_m),
+      [&v](const Eigen::Vector3d& pose, std::array<Eigen::Vector2d, 3>* px) {
+        return vision::TargetAxesInImage(v.camera, v.floor, v.target_height_m, pose,
+                                         kPreviewAxisLengthM, px);
+      });
 }
 
 }  // namespace kincal::daemon

@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <functional>
 #include <kincal/preview_t.hpp>
+#include <memory>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <string>
@@ -24,6 +25,7 @@
 #include <vector>
 
 #include "daemon/publisher.h"
+#include "daemon/sources.h"
 #include "kincal/daemon/config.h"
 
 namespace kincal::daemon {
@@ -86,5 +88,10 @@ class PreviewStage {
   std::atomic<int64_t> published_{0}, skipped_{0};
   std::thread thread_;
 };
+
+// kincald's preview stage (null unless preview.enabled): on lcm.preview_channel, with the
+// floor polygon and the target's axes from the camera and floor calibration in `v`.
+std::unique_ptr<PreviewStage> MakePreviewStage(const DaemonConfig& c, const VisionSetup& v,
+                                               Publisher* publisher, bool lossless);
 
 }  // namespace kincal::daemon

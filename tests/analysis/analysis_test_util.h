@@ -29,6 +29,15 @@ inline Recording Observe(const System& sys, const VecN<kMaxState>& p, ControlSig
   return rec;
 }
 
+// kincal analyze on a unicycle with the effect selection on, one thread.
+inline AnalyzeOptions AutoUnicycleOptions() {
+  AnalyzeOptions o;
+  o.model = "unicycle";
+  o.effects_mode = "auto";
+  o.num_threads = 1;
+  return o;
+}
+
 inline Recording UnicycleRecording(double duration_s, const std::vector<std::string>& hidden,
                                    const std::map<std::string, double>& truth, uint64_t seed) {
   const System sys = MakeSystem("unicycle", hidden);

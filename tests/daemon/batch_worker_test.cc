@@ -16,33 +16,25 @@
 namespace kincal::daemon {
 namespace {
 
-AnalyzeOptions AutoOptions() {
-  AnalyzeOptions o;
-  o.model = "unicycle";
-  o.effects_mode = "auto";
-  o.num_threads = 1;
-  return o;
-}
-
 // kincald stopping: the running batch ends early, marked cancelled (not a failure); the
 // next one runs in full.
 TEST(BatchWorker, ARunningBatchCanBeCancelledAndTheNextRunsInFull) {
   BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   const Recording slow = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
-  ASSERT_TRUE(worker.Start(1, slow, AutoOptions()));  // a selection of ~20 s in full
+  ASSERT_TRUE(worker.Start(1, slow, testing::AutoUnicycleOptions()));  // a selection of ~20 s in full
   worker.CancelRunning();
   const BatchCalibration r = worker.Wait();
   EXPECT_TRUE(r.cancelled);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("stopping"), std::string::npos) << r.error;
-  ASSERT_TRUE(worker.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
+  ASSERT_TRUE(worker.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const BatchCalibration next = worker.Wait();
   EXPECT_FALSE(next.cancelled);
   ASSERT_TRUE(next.ok) << next.error;
   EXPECT_EQ(next.sequence, 2);
   // A pipeline blocked waiting (a lossless replay) is released by the cancel at once, the
   // batch still running until its next stage; Wait then collects it.
-  ASSERT_TRUE(worker.Start(3, slow, AutoOptions()));
+  ASSERT_TRUE(worker.Start(3, slow, testing::AutoUnicycleOptions()));
   std::thread stopper([&worker] {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     worker.CancelRunning();

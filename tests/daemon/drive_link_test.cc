@@ -289,5 +289,14 @@ TEST(DriveDaemon, StatusIsHonestOnceTheEstimateIsRightAndAHiddenLagIsStillNamed)
   EXPECT_LE(named_s, 30.0);
 }
 
+TEST(DriveLink, KincaldMakesOneOnlyForGuidanceDrive) {
+  DaemonConfig c;
+  const VisionSetup v = LoadVisionSetup(c).value();
+  EXPECT_EQ(MakeDriveLink(c, v), nullptr);
+  c.guidance.enabled = true;
+  c.guidance.drive = true;
+  EXPECT_NE(MakeDriveLink(c, v), nullptr);
+}
+
 }  // namespace
 }  // namespace kincal::daemon

@@ -53,5 +53,38 @@ TEST(FilterSetup, TheDrawingWinsOverTheCheckpointResumed) {
                    sys.params()[static_cast<size_t>(b)].default_value);
 }
 
+// --resume: nothing named, nothing read; a missing file and a checkpoint of another model
+// are errors naming the file.
+TEST(FilterSetup, TheCheckpointResumedIsReadAndItsModelChecked) {
+  const System sys = MakeSystem("diffdrive", {});
+  DaemonConfig c;
+  const StatusOr<std::optional<Checkpoint>> none = ReadResumed(c, sys);
+  ASSERT_TRUE(none.ok()) << none.status().message();
+  EXPECT_FALSE(none->has_value());
+  c.checkpoint.resume = ::testing::TempDir() + "/no_such_checkpoint.json";
+  const StatusOr<std::optional<Checkpoint>> missing = ReadResumed(c, sys);
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("no_such_checkpoint.json"), std::string::npos);
+  Checkpoint ck;
+  ck.model = "unicycle";
+  ck.filter = "dd2";
+  ck.names = {"k_v", "k_omega"};
+  ck.units = {"1", "1"};
+  ck.values = {0.9, 0.8};
+  ck.covariance = Eigen::Matrix2d::Identity() * 1e-4;
+  c.checkpoint.resume = ::testing::TempDir() + "/unicycle_checkpoint.json";
+  ASSERT_TRUE(WriteCheckpoint(c.checkpoint.resume, ck).ok());
+  const StatusOr<std::optional<Checkpoint>> other = ReadResumed(c, sys);
+  ASSERT_FALSE(other.ok());
+  EXPECT_NE(other.status().message().find("checkpoint is for model 'unicycle', the config says "
+                                          "'diffdrive'"),
+            std::string::npos)
+      << other.status().message();
+  const StatusOr<std::optional<Checkpoint>> same = ReadResumed(c, MakeSystem("unicycle", {}));
+  ASSERT_TRUE(same.ok()) << same.status().message();
+  ASSERT_TRUE(same->has_value());
+  EXPECT_EQ((*same)->values, ck.values);
+}
+
 }  // namespace
 }  // namespace kincal::daemon

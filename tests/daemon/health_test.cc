@@ -125,5 +125,19 @@ TEST(Health, NoTargetAndAModelThatDoesNotFitAreNotOk) {
   EXPECT_EQ(h.ok, 1) << h.message;
 }
 
+// The account is logged when it changes and again every kRepeatNs while it stands; its
+// clearing once ("health: ok"); nothing while all is well.
+TEST(Health, AStandingAccountIsLoggedWhenItChangesAndAgainWhileItStands) {
+  HealthReporter r;
+  EXPECT_FALSE(r.Log("", 0));
+  EXPECT_TRUE(r.Log("no frames for 3.0 s", 1));
+  EXPECT_FALSE(r.Log("no frames for 3.0 s", 1 + HealthReporter::kRepeatNs));
+  EXPECT_TRUE(r.Log("no frames for 3.0 s", 2 + HealthReporter::kRepeatNs));
+  EXPECT_TRUE(r.Log("no frames for 4.0 s", 3 + HealthReporter::kRepeatNs));
+  EXPECT_TRUE(r.Log("", 4 + HealthReporter::kRepeatNs));   // cleared: "health: ok"
+  EXPECT_FALSE(r.Log("", 5 + HealthReporter::kRepeatNs));  // still well: nothing
+  EXPECT_FALSE(r.Log("", 10 * HealthReporter::kRepeatNs));
+}
+
 }  // namespace
 }  // namespace kincal::daemon

@@ -11,18 +11,12 @@
 #include <kincal/pose_t.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "lcm_round_trip.h"
+
 namespace kincal::daemon {
 namespace {
 
-// Encodes and decodes a message: what a subscriber receives.
-template <typename Msg>
-Msg RoundTrip(const Msg& m) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  EXPECT_EQ(m.encode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  Msg out;
-  EXPECT_EQ(out.decode(buf.data(), 0, static_cast<int>(buf.size())), static_cast<int>(buf.size()));
-  return out;
-}
+using testing::RoundTrip;
 
 TEST(Messages, PoseCovarianceIsRowMajorAndMarkersKeepTheirCount) {
   PoseSample p;

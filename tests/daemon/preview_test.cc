@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "daemon/daemon_test_util.h"
+#include "kincal/vision/floor_view.h"
 
 namespace kincal::daemon {
 namespace {
@@ -190,6 +191,41 @@ TEST(Preview, ThePosesAxesTravelWithThePreview) {
   EXPECT_EQ(heard.frames[1].num_axes, 0);
   EXPECT_TRUE(heard.frames[1].axes_u.empty());
   EXPECT_EQ(heard.frames[2].num_axes, 0);
+}
+
+// kincald's preview stage: none unless enabled; enabled, its previews carry the floor the
+// default nadir camera sees and the axes of a pose projected through it.
+TEST(Preview, KincaldsStageProjectsThroughItsCamera) {
+  Publisher pub;
+  ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
+  DaemonConfig c;
+  const VisionSetup v = LoadVisionSetup(c).value();
+  EXPECT_EQ(MakePreviewStage(c, v, &pub, true), nullptr);
+  c.preview.enabled = true;
+  c.lcm.preview_channel = "PREVIEW";
+  Heard heard;
+  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  {
+    const std::unique_ptr<PreviewStage> preview = MakePreviewStage(c, v, &pub, true);
+    ASSERT_NE(preview, nullptr);
+    const Eigen::Vector3d pose(0.2, 0.1, 0.0);
+    preview->Offer(cv::Mat(v.camera.height, v.camera.width, CV_8UC1, cv::Scalar(90)), 1'000'000,
+                   0, &pose);
+    preview->Drain();
+  }
+  while (pub.lcm()->handleTimeout(0) > 0) {
+  }
+  ASSERT_EQ(heard.frames.size(), 1u);
+  const kincal::preview_t& f = heard.frames[0];
+  EXPECT_EQ(f.num_floor, 32);
+  ASSERT_EQ(f.num_axes, 3);
+  std::array<Eigen::Vector2d, 3> px;
+  ASSERT_TRUE(vision::TargetAxesInImage(v.camera, v.floor, v.target_height_m, pose,
+                                        kPreviewAxisLengthM, &px));
+  for (size_t k = 0; k < 3; ++k) {
+    EXPECT_DOUBLE_EQ(f.axes_u[k], px[k].x());
+    EXPECT_DOUBLE_EQ(f.axes_v[k], px[k].y());
+  }
 }
 
 }  // namespace

@@ -15,19 +15,11 @@
 namespace kincal {
 namespace {
 
-AnalyzeOptions AutoOptions() {
-  AnalyzeOptions o;
-  o.model = "unicycle";
-  o.effects_mode = "auto";
-  o.num_threads = 1;
-  return o;
-}
-
 TEST(BatchCalibration, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
   InlineBatchRunner worker;
   const Recording rec = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
-  ASSERT_TRUE(worker.Start(7, rec, AutoOptions()));
-  EXPECT_FALSE(worker.Start(8, rec, AutoOptions()));  // one at a time
+  ASSERT_TRUE(worker.Start(7, rec, testing::AutoUnicycleOptions()));
+  EXPECT_FALSE(worker.Start(8, rec, testing::AutoUnicycleOptions()));  // one at a time
   const BatchCalibration r = worker.Wait();
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_EQ(r.sequence, 7);
@@ -37,7 +29,7 @@ TEST(BatchCalibration, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
   EXPECT_NE(r.accepted_evidence[0].find("held-out gain"), std::string::npos);
   EXPECT_EQ(r.num_poses, static_cast<int>(rec.poses.size()));
   EXPECT_GT(r.compute_s, 0.0);
-  const AnalyzeResult offline = Analyze(rec, AutoOptions()).value();
+  const AnalyzeResult offline = Analyze(rec, testing::AutoUnicycleOptions()).value();
   ASSERT_EQ(r.params.size(), offline.after.params.size());
   ASSERT_EQ(r.covariance.rows(), static_cast<int>(r.params.size()));
   for (size_t i = 0; i < r.params.size(); ++i) {
@@ -55,7 +47,7 @@ TEST(BatchCalibration, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
 
 TEST(BatchCalibration, CleanDataAcceptsNothing) {
   InlineBatchRunner worker;
-  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
+  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const BatchCalibration r = worker.Wait();
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_TRUE(r.accepted.empty()) << r.evidence;
@@ -65,7 +57,7 @@ TEST(BatchCalibration, CleanDataAcceptsNothing) {
 
 TEST(BatchCalibration, TooLittleDataIsAnErrorNotACrash) {
   InlineBatchRunner worker;
-  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(1.0, {}, {}, 5), AutoOptions()));
+  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(1.0, {}, {}, 5), testing::AutoUnicycleOptions()));
   const BatchCalibration r = worker.Wait();
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("at least"), std::string::npos) << r.error;
@@ -78,7 +70,7 @@ TEST(BatchCalibration, AFitThatExplainsNothingIsFlagged) {
   std::srand(6);  // Eigen's Random()
   for (auto& p : rec.poses) p.z = rec.poses.front().z + 1e-3 * Eigen::Vector3d::Random();
   InlineBatchRunner worker;
-  AnalyzeOptions o = AutoOptions();
+  AnalyzeOptions o = testing::AutoUnicycleOptions();
   o.effects_mode = "none";
   ASSERT_TRUE(worker.Start(1, rec, o));
   const BatchCalibration r = worker.Wait();
@@ -89,14 +81,14 @@ TEST(BatchCalibration, AFitThatExplainsNothingIsFlagged) {
 
 TEST(BatchCalibration, ACancelledBatchSaysSoAndTheNextRunsInFull) {
   InlineBatchRunner runner;
-  ASSERT_TRUE(runner.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
+  ASSERT_TRUE(runner.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   runner.CancelRunning();
   EXPECT_FALSE(runner.WaitUnlessCancelled().has_value());  // stopping: nothing waits
   const BatchCalibration r = runner.Wait();
   EXPECT_TRUE(r.cancelled);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("stopping"), std::string::npos) << r.error;
-  ASSERT_TRUE(runner.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), AutoOptions()));
+  ASSERT_TRUE(runner.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const std::optional<BatchCalibration> next = runner.Poll();
   ASSERT_TRUE(next.has_value());
   EXPECT_FALSE(next->cancelled);
