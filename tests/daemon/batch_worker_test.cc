@@ -21,13 +21,15 @@ namespace {
 TEST(BatchWorker, ARunningBatchCanBeCancelledAndTheNextRunsInFull) {
   BatchWorker worker(/*background=*/false);  // the fit, not the priority, under test
   const Recording slow = testing::UnicycleRecording(60.0, {"time_offset"}, {{"delay_s", 0.2}}, 3);
-  ASSERT_TRUE(worker.Start(1, slow, testing::AutoUnicycleOptions()));  // a selection of ~20 s in full
+  ASSERT_TRUE(
+      worker.Start(1, slow, testing::AutoUnicycleOptions()));  // a selection of ~20 s in full
   worker.CancelRunning();
   const BatchCalibration r = worker.Wait();
   EXPECT_TRUE(r.cancelled);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("stopping"), std::string::npos) << r.error;
-  ASSERT_TRUE(worker.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
+  ASSERT_TRUE(
+      worker.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const BatchCalibration next = worker.Wait();
   EXPECT_FALSE(next.cancelled);
   ASSERT_TRUE(next.ok) << next.error;

@@ -47,7 +47,8 @@ TEST(BatchCalibration, FindsAHiddenDelayWithItsEvidenceAndAnalyzesCovariance) {
 
 TEST(BatchCalibration, CleanDataAcceptsNothing) {
   InlineBatchRunner worker;
-  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
+  ASSERT_TRUE(
+      worker.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const BatchCalibration r = worker.Wait();
   ASSERT_TRUE(r.ok) << r.error;
   EXPECT_TRUE(r.accepted.empty()) << r.evidence;
@@ -57,7 +58,8 @@ TEST(BatchCalibration, CleanDataAcceptsNothing) {
 
 TEST(BatchCalibration, TooLittleDataIsAnErrorNotACrash) {
   InlineBatchRunner worker;
-  ASSERT_TRUE(worker.Start(1, testing::UnicycleRecording(1.0, {}, {}, 5), testing::AutoUnicycleOptions()));
+  ASSERT_TRUE(
+      worker.Start(1, testing::UnicycleRecording(1.0, {}, {}, 5), testing::AutoUnicycleOptions()));
   const BatchCalibration r = worker.Wait();
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("at least"), std::string::npos) << r.error;
@@ -81,14 +83,16 @@ TEST(BatchCalibration, AFitThatExplainsNothingIsFlagged) {
 
 TEST(BatchCalibration, ACancelledBatchSaysSoAndTheNextRunsInFull) {
   InlineBatchRunner runner;
-  ASSERT_TRUE(runner.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
+  ASSERT_TRUE(
+      runner.Start(1, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   runner.CancelRunning();
   EXPECT_FALSE(runner.WaitUnlessCancelled().has_value());  // stopping: nothing waits
   const BatchCalibration r = runner.Wait();
   EXPECT_TRUE(r.cancelled);
   EXPECT_FALSE(r.ok);
   EXPECT_NE(r.error.find("stopping"), std::string::npos) << r.error;
-  ASSERT_TRUE(runner.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
+  ASSERT_TRUE(
+      runner.Start(2, testing::UnicycleRecording(60.0, {}, {}, 4), testing::AutoUnicycleOptions()));
   const std::optional<BatchCalibration> next = runner.Poll();
   ASSERT_TRUE(next.has_value());
   EXPECT_FALSE(next->cancelled);
