@@ -83,7 +83,7 @@ TEST(FilterSetup, TheCheckpointResumedIsReadAndItsModelChecked) {
   const StatusOr<std::optional<Checkpoint>> same = ReadResumed(c, MakeSystem("unicycle", {}));
   ASSERT_TRUE(same.ok()) << same.status().message();
   ASSERT_TRUE(same->has_value());
-  EXPECT_EQ((*same)->values, ck.values);
+  EXPECT_EQ(same.value()->values, ck.values);
 }
 
 }  // namespace

@@ -205,12 +205,12 @@ TEST(Preview, KincaldsStageProjectsThroughItsCamera) {
   c.lcm.preview_channel = "PREVIEW";
   Heard heard;
   pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  const Eigen::Vector3d pose(0.2, 0.1, 0.0);
   {
     const std::unique_ptr<PreviewStage> preview = MakePreviewStage(c, v, &pub, true);
     ASSERT_NE(preview, nullptr);
-    const Eigen::Vector3d pose(0.2, 0.1, 0.0);
-    preview->Offer(cv::Mat(v.camera.height, v.camera.width, CV_8UC1, cv::Scalar(90)), 1'000'000,
-                   0, &pose);
+    preview->Offer(cv::Mat(v.camera.height, v.camera.width, CV_8UC1, cv::Scalar(90)), 1'000'000, 0,
+                   &pose);
     preview->Drain();
   }
   while (pub.lcm()->handleTimeout(0) > 0) {
