@@ -95,7 +95,9 @@ AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
 // The recording from the inputs the command line names: one kind of input, each
 // repeated --log (or --controls/--poses pair) one run or more, joined in the order given.
 StatusOr<Recording> ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
-  const auto model = MakeModel(o.model);
+  auto made = MakeModel(o.model);
+  if (!made.ok()) return made.status();
+  const auto model = std::move(made).value();
   const int sources =
       !a.mrclam.empty() + !a.log.empty() + (!a.controls.empty() || !a.poses.empty());
   if (sources != 1) return Status::Error("give exactly one of --controls/--poses, --log, --mrclam");

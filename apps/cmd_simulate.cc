@@ -156,8 +156,8 @@ Command AddSimulate(CLI::App& app) {
     if (args->seed != 0) sc.seed = args->seed;
     if (!args->filter.empty()) sc.filter = args->filter;
 
-    const System truth_sys = MakeSystem(sc.model, sc.hidden_effects);
-    const System est_sys = MakeSystem(sc.model, sc.estimator_effects);
+    const System truth_sys = OrThrow(MakeSystem(sc.model, sc.hidden_effects));
+    const System est_sys = OrThrow(MakeSystem(sc.model, sc.estimator_effects));
     const int nc = truth_sys.num_controls();
     if (static_cast<int>(sc.control_low.size()) != nc ||
         static_cast<int>(sc.control_high.size()) != nc) {

@@ -20,7 +20,7 @@ int main(int argc, char** argv) {
   auto* models = app.add_subcommand("models", "list kinematic models, effects and filters");
   commands[models] = [] {
     for (const auto& name : kincal::ModelRegistry::Instance().Names()) {
-      auto m = kincal::MakeModel(name);
+      auto m = kincal::MakeModel(name).value();
       std::cout << "model " << name << ": " << m->description() << "\n  params:";
       for (const auto& p : m->params()) std::cout << " " << p.name << " [" << p.unit << "]";
       std::cout << "\n  controls:";

@@ -47,7 +47,7 @@ Recording SimulatedRecording(const std::string& model, const std::vector<std::st
                              const std::map<std::string, double>& truth,
                              const std::vector<double>& lo, const std::vector<double>& hi,
                              double duration_s, double pose_hz, uint64_t seed) {
-  const System sys = MakeSystem(model, effects);
+  const System sys = MakeSystem(model, effects).value();
   VecN<kMaxState> p(sys.num_params());
   p.setZero();
   for (const auto& [name, v] : truth) p[sys.ParamIndex(name)] = v;

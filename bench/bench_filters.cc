@@ -14,7 +14,7 @@ namespace {
 
 struct Fixture {
   explicit Fixture(const std::string& model)
-      : sys(MakeSystem(model)), controls(sys.num_controls(), 0) {
+      : sys(MakeSystem(model).value()), controls(sys.num_controls(), 0) {
     std::mt19937_64 rng(1);
     std::vector<double> lo(static_cast<size_t>(sys.num_controls()), -1.0);
     std::vector<double> hi(static_cast<size_t>(sys.num_controls()), 1.0);
@@ -28,7 +28,7 @@ struct Fixture {
 
 void BM_FilterStep(benchmark::State& state, std::string model, std::string filter) {
   Fixture fx(model);
-  auto f = MakeFilter(filter);
+  auto f = MakeFilter(filter).value();
   const int n = fx.sys.state_dim();
   StateMat P = StateMat::Identity(n, n) * 1e-4;
   f->Initialize(fx.x, P, 1u << 2);
@@ -60,12 +60,12 @@ void BM_Propagate(benchmark::State& state, std::string model) {
 // The SR-DD2 step of `model` with `effects` over one 30 Hz frame interval.
 void AugmentedStep(benchmark::State& state, const std::string& model,
                    const std::vector<std::string>& effects) {
-  const System sys = MakeSystem(model, effects);
+  const System sys = MakeSystem(model, effects).value();
   ControlSignal controls(2, 0);
   std::mt19937_64 rng(1);
   const std::vector<double> lo = {-1, -1}, hi = {1, 1};
   AppendSmoothRandom(&controls, 0, SecondsToNs(10.0), lo, hi, 1.0, 50.0, rng);
-  auto f = MakeFilter("dd2");
+  auto f = MakeFilter("dd2").value();
   const int n = sys.state_dim();
   f->Initialize(sys.DefaultState(0, 0, 0), StateMat::Identity(n, n) * 1e-4, 1u << 2);
   const SystemProcess proc(sys, controls, 1.0, 1.0 + 1.0 / 30.0);

@@ -10,7 +10,7 @@ namespace kincal {
 namespace {
 
 struct Reference {
-  System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"});
+  System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value();
   Eigen::VectorXd p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
   Eigen::MatrixXd prior = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05)
                               .finished()

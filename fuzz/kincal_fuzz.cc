@@ -67,7 +67,7 @@ void Expect(F&& f) {
 }
 
 const kincal::KinematicModel& Diffdrive() {
-  static const auto model = kincal::MakeModel("diffdrive");
+  static const auto model = kincal::MakeModel("diffdrive").value();
   return *model;
 }
 
@@ -123,7 +123,7 @@ void FuzzCsv(const uint8_t* data, size_t size) {
   const size_t cut = size == 0 ? 0 : std::min<size_t>(size, 1 + data[0] * size / 256);
   const std::string c = WriteFile("controls.csv", data, cut);
   const std::string p = WriteFile("poses.csv", data + cut, size - cut);
-  static const auto unicycle = kincal::MakeModel("unicycle");
+  static const auto unicycle = kincal::MakeModel("unicycle").value();
   Expect([&] { (void)kincal::ReadCsvRecording(c, p, *unicycle); });
 }
 

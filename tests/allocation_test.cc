@@ -34,7 +34,7 @@ namespace {
 class NoAllocation : public ::testing::TestWithParam<const char*> {};
 
 TEST_P(NoAllocation, FilterStepDoesNotAllocate) {
-  const System sys = MakeSystem("diffdrive", {"time_offset", "actuator_lag", "lever_arm"});
+  const System sys = MakeSystem("diffdrive", {"time_offset", "actuator_lag", "lever_arm"}).value();
   std::mt19937_64 rng(5);
   ControlSignal u(2, 0);
   const std::vector<double> lo = {-5, -5}, hi = {20, 20};

@@ -36,7 +36,7 @@ TEST_P(Consistency, NeesInside95PercentBand) {
   const Case c = GetParam();
   auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
   const bool control_noise = c.control_noise;
-  const System sys = MakeSystem(sc.model, c.effects);
+  const System sys = MakeSystem(sc.model, c.effects).value();
   for (const auto& e : c.effect_truth) sc.truth.push_back(e.second);
   const int n = sys.state_dim();
   // Effect states (a lag's realised controls) are deterministic functions of the

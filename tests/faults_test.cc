@@ -330,7 +330,7 @@ TEST(MeasurementFaults, AHiddenMarkerGivesNoPoseAndTheEstimateHolds) {
 }
 
 TEST(MeasurementFaults, AFarOffPoseFailsTheGateAndLeavesTheStateAlone) {
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   OnlineCalibratorOptions opt;
   opt.noise.control_psd = {0.0, 0.0};
   OnlineCalibrator cal(sys, opt, 0);

@@ -43,7 +43,7 @@ class Recovery : public ::testing::TestWithParam<Case> {};
 TEST_P(Recovery, FilterAndBatchRecoverTruthWithin3Sigma) {
   const Case c = GetParam();
   const auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
-  const System sys = MakeSystem(sc.model, c.effects);
+  const System sys = MakeSystem(sc.model, c.effects).value();
   const VecN<kMaxState> truth = TruthParams(sys, sc, c);
   std::mt19937_64 rng(42 + static_cast<uint64_t>(c.model));
   const Eigen::Vector3d sigma(0.001, 0.001, 0.005);

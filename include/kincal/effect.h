@@ -200,9 +200,9 @@ Status MakeEffect(const EffectSpec& spec, const KinematicModel& model,
 // Parses "name" or "name[ch1,ch2]" into a spec.
 Status ParseEffectSpec(std::string_view text, EffectSpec* out);
 
-// Convenience forms of the two: throw std::invalid_argument with the same messages.
-std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model);
-EffectSpec ParseEffectSpec(std::string_view text);
+// The two as values.
+StatusOr<std::unique_ptr<Effect>> MakeEffect(const EffectSpec& spec, const KinematicModel& model);
+StatusOr<EffectSpec> ParseEffectSpec(std::string_view text);
 
 }  // namespace kincal
 

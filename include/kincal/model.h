@@ -82,8 +82,8 @@ void RegisterBuiltins(Registry<KinematicModel>* registry);
 
 // Creates a registered model; an unknown name is an error naming the known models.
 Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* out);
-// Convenience: throws std::invalid_argument with the same message.
-std::shared_ptr<const KinematicModel> MakeModel(std::string_view name);
+// The same as a value.
+StatusOr<std::shared_ptr<const KinematicModel>> MakeModel(std::string_view name);
 
 // The parameters' names as a list for messages ("k_v, k_steer, steer_offset, wheelbase").
 std::string ParamNames(const std::vector<ParamInfo>& params);

@@ -23,6 +23,7 @@
 #include "kincal/control_signal.h"
 #include "kincal/effect.h"
 #include "kincal/model.h"
+#include "kincal/status.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -131,8 +132,9 @@ void IntegrateArc(const Twist<T>& tw, const T& dt, T* x, T* y, T* theta);
 // an error names the unknown model or effect, the bad spec or the conflict.
 Status MakeSystem(std::string_view model, const std::vector<std::string>& effects,
                   SystemOptions options, std::unique_ptr<System>* out);
-// Convenience: throws std::invalid_argument with the same message.
-System MakeSystem(std::string_view model, const std::vector<std::string>& effects = {},
-                  SystemOptions options = {});
+// The same as a value: MakeSystem("diffdrive", {"actuator_lag"}).value() where the names
+// are known good (a literal, a validated config).
+StatusOr<System> MakeSystem(std::string_view model, const std::vector<std::string>& effects = {},
+                            SystemOptions options = {});
 
 }  // namespace kincal

@@ -85,19 +85,15 @@ Status ParseEffectSpec(std::string_view text, EffectSpec* out) {
   return {};
 }
 
-std::unique_ptr<Effect> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
+StatusOr<std::unique_ptr<Effect>> MakeEffect(const EffectSpec& spec, const KinematicModel& model) {
   std::unique_ptr<Effect> e;
-  if (const Status s = MakeEffect(spec, model, &e); !s.ok()) {
-    throw std::invalid_argument(s.message());
-  }
+  if (Status s = MakeEffect(spec, model, &e); !s.ok()) return s;
   return e;
 }
 
-EffectSpec ParseEffectSpec(std::string_view text) {
+StatusOr<EffectSpec> ParseEffectSpec(std::string_view text) {
   EffectSpec spec;
-  if (const Status s = ParseEffectSpec(text, &spec); !s.ok()) {
-    throw std::invalid_argument(s.message());
-  }
+  if (Status s = ParseEffectSpec(text, &spec); !s.ok()) return s;
   return spec;
 }
 

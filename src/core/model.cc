@@ -29,9 +29,9 @@ Status MakeModel(std::string_view name, std::shared_ptr<const KinematicModel>* o
   return {};
 }
 
-std::shared_ptr<const KinematicModel> MakeModel(std::string_view name) {
+StatusOr<std::shared_ptr<const KinematicModel>> MakeModel(std::string_view name) {
   std::shared_ptr<const KinematicModel> m;
-  if (const Status s = MakeModel(name, &m); !s.ok()) throw std::invalid_argument(s.message());
+  if (Status s = MakeModel(name, &m); !s.ok()) return s;
   return m;
 }
 

@@ -320,12 +320,10 @@ Status MakeSystem(std::string_view model, const std::vector<std::string>& effect
   return {};
 }
 
-System MakeSystem(std::string_view model, const std::vector<std::string>& effects,
-                  SystemOptions options) {
+StatusOr<System> MakeSystem(std::string_view model, const std::vector<std::string>& effects,
+                            SystemOptions options) {
   std::unique_ptr<System> sys;
-  if (const Status s = MakeSystem(model, effects, options, &sys); !s.ok()) {
-    throw std::invalid_argument(s.message());
-  }
+  if (Status s = MakeSystem(model, effects, options, &sys); !s.ok()) return s;
   return std::move(*sys);
 }
 

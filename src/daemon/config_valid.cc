@@ -250,7 +250,8 @@ bool ValidVision(const DaemonConfig& c, std::string* error) {
 bool ValidEstimator(const DaemonConfig& c, std::string* error) {
   if (!c.robot.IsValid(error) || !c.filter.IsValid(error)) return false;
   if (!c.filter.control_psd.empty()) {
-    const int controls = MakeModel(c.robot.model)->num_controls();  // robot.IsValid: it exists
+    const int controls =
+        MakeModel(c.robot.model).value()->num_controls();  // robot.IsValid: it exists
     if (!Expect(static_cast<int>(c.filter.control_psd.size()) == controls,
                 "filter.control_psd needs " + std::to_string(controls) + " values for model " +
                     c.robot.model,

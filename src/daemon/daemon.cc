@@ -104,7 +104,7 @@ struct Daemon::Impl {
 
   explicit Impl(DaemonConfig c)
       : cfg(std::move(c)),
-        sys(MakeSystem(cfg.robot.model, cfg.robot.effects)),
+        sys(OrStartupError(MakeSystem(cfg.robot.model, cfg.robot.effects))),
         vis(OrStartupError(LoadVisionSetup(cfg))),
         drive(MakeDriveLink(cfg, vis)),
         source(OrStartupError(MakeSource(

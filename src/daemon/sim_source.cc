@@ -40,7 +40,7 @@ class SimSource final : public FrameSource {
       : cfg_(c),
         vis_(v),
         sc_(OrThrow(LoadScenario(c.sim.scenario))),
-        truth_(MakeSystem(sc_.model, sc_.hidden_effects)),
+        truth_(OrThrow(MakeSystem(sc_.model, sc_.hidden_effects))),
         intake_(std::move(controls)),
         publish_(std::move(publish)),
         drive_(drive),

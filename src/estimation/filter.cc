@@ -51,11 +51,11 @@ void MeasurementFunction::Jacobian(const StateVec& x, MeasStateMat* H) const {
   }
 }
 
-std::unique_ptr<Filter> MakeFilter(std::string_view name) {
+StatusOr<std::unique_ptr<Filter>> MakeFilter(std::string_view name) {
   auto f = FilterRegistry::Instance().Create(name);
   if (!f) {
-    throw std::invalid_argument("unknown filter '" + std::string(name) +
-                                "' (known: " + FilterRegistry::Instance().KnownList() + ")");
+    return Status::Error("unknown filter '" + std::string(name) +
+                         "' (known: " + FilterRegistry::Instance().KnownList() + ")");
   }
   return f;
 }

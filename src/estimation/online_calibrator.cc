@@ -90,7 +90,7 @@ OnlineCalibrator::OnlineCalibrator(const System& sys, OnlineCalibratorOptions op
       meas_(sys) {
   std::string error;
   if (!options_.IsValid(sys_, &error)) throw std::invalid_argument("OnlineCalibrator: " + error);
-  filter_ = MakeFilter(options_.filter);
+  filter_ = MakeFilter(options_.filter).value();
   noise_ = options_.noise;
 }
 

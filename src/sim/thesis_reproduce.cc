@@ -259,7 +259,7 @@ void FinishPoses(const PoseErrorStats& poses, ThesisResult* res) {
 ThesisResult ReproduceThesis(const ThesisOptions& o) {
   std::string error;
   if (!o.IsValid(&error)) throw std::invalid_argument("thesis: " + error);
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const Eigen::Vector3d nominal(kThesisRL, kThesisRR, kThesisD);
   const double focal_px = 0.5 * o.image_width_px / std::tan(0.5 * o.hfov_rad);
   // Four markers at the corners of a 60 x 100 mm rectangle on the 80 x 120 mm plate,

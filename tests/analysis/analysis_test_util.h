@@ -40,7 +40,7 @@ inline AnalyzeOptions AutoUnicycleOptions() {
 
 inline Recording UnicycleRecording(double duration_s, const std::vector<std::string>& hidden,
                                    const std::map<std::string, double>& truth, uint64_t seed) {
-  const System sys = MakeSystem("unicycle", hidden);
+  const System sys = MakeSystem("unicycle", hidden).value();
   std::map<std::string, double> values = {{"k_v", 0.9}, {"k_omega", 0.8}};
   values.insert(truth.begin(), truth.end());
   const VecN<kMaxState> p = ParamsFrom(sys, values, "truth").value();
@@ -55,7 +55,7 @@ inline Recording UnicycleRecording(double duration_s, const std::vector<std::str
 // `control_hz`, poses at `pose_hz` with 1 mm / 3 mrad noise.
 inline Recording UnicycleAtRates(double duration_s, double pose_hz, double control_hz,
                                  uint64_t seed) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   VecN<kMaxState> p(2);
   p << 0.9, 0.8;
   std::mt19937_64 rng(seed);

@@ -37,7 +37,7 @@ Recording SimulateRecording(const Case& c, double duration_s) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
   std::vector<std::string> specs;
   for (const auto& h : c.hidden) specs.push_back(h.spec);
-  const System truth = MakeSystem(sc.model, specs);
+  const System truth = MakeSystem(sc.model, specs).value();
   VecN<kMaxState> p(truth.num_params());
   for (int i = 0; i < truth.num_params(); ++i) {
     p[i] = i < static_cast<int>(sc.truth.size()) ? sc.truth[static_cast<size_t>(i)] : 0.0;
@@ -127,7 +127,7 @@ std::vector<Case> SingleEffectCases() {
   std::vector<Case> cases;
   for (int m = 0; m < static_cast<int>(AllModelScenarios().size()); ++m) {
     const auto sc = AllModelScenarios()[static_cast<size_t>(m)];
-    const auto model = MakeModel(sc.model);
+    const auto model = MakeModel(sc.model).value();
     const std::string c0 = model->controls()[0].name;
     const std::string c1 = model->controls()[1].name;
     const double range1 = sc.hi[1] - sc.lo[1];
@@ -250,7 +250,7 @@ TEST(Baseline, GuessesOffByFiveStillReachTheGlobalOptimum) {
     const Recording rec = SimulateRecording({m, {}, 11}, 60.0);
     AnalyzeOptions o = FastOptions(sc.model);
     o.effects_mode = "none";
-    const System sys = MakeSystem(sc.model);
+    const System sys = MakeSystem(sc.model).value();
     for (double factor : {5.0, 0.2}) {
       o.init.clear();
       for (int i = 0; i < sys.num_params(); ++i) {

@@ -16,7 +16,7 @@ TEST(BaselineFit, GuessesFiveTimesOffReachTheTruth) {
   o.model = "unicycle";
   std::vector<std::string> warnings;
   const Dataset d = Prepare(rec, o, &warnings).value();
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   for (const double factor : {5.0, 0.2}) {
     const Eigen::VectorXd p0 =
         InitialParams(sys, {{"k_v", 0.9 * factor}, {"k_omega", 0.8 * factor}}).value();
@@ -33,7 +33,7 @@ TEST(BaselineFit, GuessesFiveTimesOffReachTheTruth) {
 }
 
 TEST(BaselineFit, UnknownInitialNamesAreErrors) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   EXPECT_FALSE(InitialParams(sys, {{"wheelbase", 0.3}}).ok());
   const Eigen::VectorXd p = InitialParams(sys, {{"k_omega", 0.7}}).value();
   EXPECT_EQ(p[0], sys.params()[0].default_value);

@@ -21,7 +21,7 @@ Judged Judge(double k_v) {
   o.pose_sigma = Eigen::Vector2d(0.001, 0.003);
   std::vector<std::string> warnings;
   const Dataset d = Prepare(rec, o, &warnings).value();
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   Eigen::VectorXd p(2);
   p << k_v, 0.8;
   Judged j{Evaluate(sys, p, d), {}};

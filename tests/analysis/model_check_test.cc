@@ -20,8 +20,8 @@ namespace {
 // for 60 s at 30 Hz; the check sees every innovation.
 ModelCheckVerdict RunOnline(const std::string& hidden, const std::string& param, double value,
                             uint64_t seed) {
-  const System truth = MakeSystem("unicycle", {hidden});
-  const System model = MakeSystem("unicycle");
+  const System truth = MakeSystem("unicycle", {hidden}).value();
+  const System model = MakeSystem("unicycle").value();
   std::mt19937_64 rng(seed);
   ControlSignal u(2, 0);
   const std::vector<double> lo = {-0.2, -1.0}, hi = {0.8, 1.0};

@@ -24,7 +24,7 @@ TEST(Regressors, ConstantCommandGivesItsTwist) {
   Dataset d = Prepared(rec);
   Eigen::VectorXd p(2);
   p << 0.9, 0.8;
-  ComputeFeatures(&d, MakeSystem("unicycle"), p);
+  ComputeFeatures(&d, MakeSystem("unicycle").value(), p);
   ASSERT_EQ(d.features.size(), d.eval.size());
   const RegressorValues& f = d.features[d.features.size() / 2];
   EXPECT_NEAR(f[Regressor::kSpeed], 0.45, 1e-9);
@@ -43,9 +43,9 @@ TEST(Regressors, CommandLagFindsAClockOffset) {
   const Dataset d = Prepared(rec);
   Eigen::VectorXd p(2);
   p << 0.9, 0.8;
-  EXPECT_NEAR(EstimateCommandLag(d, MakeSystem("unicycle"), p), 0.7, 0.06);
+  EXPECT_NEAR(EstimateCommandLag(d, MakeSystem("unicycle").value(), p), 0.7, 0.06);
   const Recording prompt = testing::UnicycleRecording(120.0, {}, {}, 2);
-  EXPECT_NEAR(EstimateCommandLag(Prepared(prompt), MakeSystem("unicycle"), p), 0.0, 0.06);
+  EXPECT_NEAR(EstimateCommandLag(Prepared(prompt), MakeSystem("unicycle").value(), p), 0.0, 0.06);
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ namespace {
 // steering lag of 0.12 s) driven for `runs` runs of `run_s` seconds, each from its own
 // place and heading and on its own epoch (as bags are), poses at 20 Hz.
 std::vector<Recording> CarRuns(int runs, double run_s, uint64_t seed) {
-  const System sys = MakeSystem("bicycle", {"actuator_lag[steer]"});
+  const System sys = MakeSystem("bicycle", {"actuator_lag[steer]"}).value();
   const VecN<kMaxState> p = ParamsFrom(sys,
                                        {{"k_v", 0.95},
                                         {"k_steer", 0.6},
@@ -158,7 +158,7 @@ TEST(ManyRuns, RunsShorterThanAWindowAreSkippedAndCounted) {
 // its controls as cumulative encoder counts (4096 per revolution, whole counts): read,
 // differenced into wheel rates run by run, and the wheels come back within 3 sigma.
 TEST(ManyRuns, CsvRunColumnWithEncoderCountsCalibratesTheWheels) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const VecN<kMaxState> p =
       ParamsFrom(sys, {{"r_l", 0.031}, {"r_r", 0.0313}, {"d", 0.148}}, "truth").value();
   std::mt19937_64 rng(17);
@@ -191,9 +191,9 @@ TEST(ManyRuns, CsvRunColumnWithEncoderCountsCalibratesTheWheels) {
   const std::string dir = ::testing::TempDir();
   std::ofstream(dir + "/counts.csv") << c.str();
   std::ofstream(dir + "/poses.csv") << q.str();
-  Recording rec =
-      ReadCsvRecording(dir + "/counts.csv", dir + "/poses.csv", *MakeModel("diffdrive"), true)
-          .value();
+  Recording rec = ReadCsvRecording(dir + "/counts.csv", dir + "/poses.csv",
+                                   *MakeModel("diffdrive").value(), true)
+                      .value();
   ASSERT_EQ(rec.runs.size(), 9u);
   ASSERT_TRUE(PositionsToRates(4096, &rec).ok());
   AnalyzeOptions o;
@@ -211,7 +211,7 @@ TEST(ManyRuns, CsvRunColumnWithEncoderCountsCalibratesTheWheels) {
 
 // Dead reckoning at the true parameters of a clean run is exact; a wrong gain drifts.
 TEST(ManyRuns, DeadReckoningIsExactAtTheTruthAndDriftsOffIt) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   std::mt19937_64 rng(2);
   ControlSignal u(2, 0);
   const std::array<double, 2> lo = {0.2, -1.0}, hi = {0.8, 1.0};

@@ -18,17 +18,17 @@ namespace {
 TEST(Selection, CandidatesAreTheEffectsThatApply) {
   AnalyzeOptions o;
   o.model = "unicycle";
-  const auto c = Candidates(*MakeModel("unicycle"), o);
+  const auto c = Candidates(*MakeModel("unicycle").value(), o);
   auto has = [&](const std::string& s) { return std::find(c.begin(), c.end(), s) != c.end(); };
   EXPECT_TRUE(has("time_offset"));
   EXPECT_TRUE(has("turn_slowdown"));
   EXPECT_FALSE(has("backlash"));  // no steering channel
   EXPECT_TRUE(has("dead_band[v]") || has("dead_band"));
   o.effects_mode = "none";
-  EXPECT_TRUE(Candidates(*MakeModel("unicycle"), o).empty());
+  EXPECT_TRUE(Candidates(*MakeModel("unicycle").value(), o).empty());
   o.effects_mode = "list";
   o.effects = {"lever_arm"};
-  EXPECT_EQ(Candidates(*MakeModel("unicycle"), o), std::vector<std::string>{"lever_arm"});
+  EXPECT_EQ(Candidates(*MakeModel("unicycle").value(), o), std::vector<std::string>{"lever_arm"});
 }
 
 // A candidate screened on the screening windows, then confirmed on all of them.
@@ -58,7 +58,7 @@ TEST(Selection, TheHiddenEffectGainsAndAWrongOneDoesNot) {
   o.model = "unicycle";
   std::vector<std::string> warnings;
   Dataset d = Prepare(rec, o, &warnings).value();
-  const auto model = std::shared_ptr<const KinematicModel>(MakeModel("unicycle"));
+  const auto model = std::shared_ptr<const KinematicModel>(MakeModel("unicycle").value());
   const System bare(model, {});
   FitReport report;
   SelectionState current;

@@ -13,7 +13,7 @@ namespace kincal::testing {
 
 // Body twist of a registered model at parameters p and controls u.
 inline Twist<double> TwistOf(const char* model, std::vector<double> p, std::vector<double> u) {
-  return MakeModel(model)->BodyTwist(p.data(), u.data());
+  return MakeModel(model).value()->BodyTwist(p.data(), u.data());
 }
 
 // Pose (x, y, theta) after t_s seconds of `command`, held from t = 0, starting at the

@@ -61,9 +61,9 @@ TEST_P(ModelTest, AutodiffJacobiansMatchFiniteDifferences) {
     effects = {"time_offset", "actuator_lag", "lever_arm", "lateral_slip", "yaw_rate_bias"};
   } else if (std::get<1>(GetParam()) == 2) {
     effects = {"asymmetric_gain", "dead_band", "effective_track"};
-    if (MakeModel(sc.model)->has_steering()) effects.push_back("backlash");
+    if (MakeModel(sc.model).value()->has_steering()) effects.push_back("backlash");
   }
-  const System sys = MakeSystem(sc.model, effects);
+  const System sys = MakeSystem(sc.model, effects).value();
   const ControlSignal u = RandomControls(sys.num_controls(), sc.lo, sc.hi, 3);
   const StateVec x = TestState(sys, sc.truth, u);
   // Interval chosen away from the (delay-shifted) 20 ms control breakpoints.
@@ -95,8 +95,8 @@ class BareModelTest : public ::testing::TestWithParam<int> {};
 TEST_P(BareModelTest, EffectStatesAloneFollowPropagate) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(GetParam())];
   std::vector<std::string> effects = {"time_offset", "actuator_lag"};
-  if (MakeModel(sc.model)->has_steering()) effects.push_back("backlash");
-  const System sys = MakeSystem(sc.model, effects);
+  if (MakeModel(sc.model).value()->has_steering()) effects.push_back("backlash");
+  const System sys = MakeSystem(sc.model, effects).value();
   ASSERT_GT(sys.num_states(), 0);
   const ControlSignal u = RandomControls(sys.num_controls(), sc.lo, sc.hi, 7);
   const StateVec x0 = TestState(sys, sc.truth, u);
@@ -116,7 +116,7 @@ TEST_P(BareModelTest, EffectStatesAloneFollowPropagate) {
 
 TEST_P(BareModelTest, ExactIntegrationMatchesFineEuler) {
   const auto sc = AllModelScenarios()[static_cast<size_t>(GetParam())];
-  const System sys = MakeSystem(sc.model);
+  const System sys = MakeSystem(sc.model).value();
   const ControlSignal u = RandomControls(sys.num_controls(), sc.lo, sc.hi, 5);
   StateVec x = TestState(sys, sc.truth, u);
   StateVec exact(x.size());
@@ -151,8 +151,17 @@ INSTANTIATE_TEST_SUITE_P(AllModels, BareModelTest, ::testing::Range(0, 5),
                          });
 
 TEST(Model, ParamNamesListsTheParametersForMessages) {
-  EXPECT_EQ(ParamNames(MakeModel("bicycle")->params()), "k_v, k_steer, steer_offset, wheelbase");
+  EXPECT_EQ(ParamNames(MakeModel("bicycle").value()->params()),
+            "k_v, k_steer, steer_offset, wheelbase");
   EXPECT_EQ(ParamNames({}), "");
+}
+
+TEST(ModelRegistry, AnUnknownNameIsAnErrorNamingTheKnownModels) {
+  const auto made = MakeModel("hovercraft");
+  ASSERT_FALSE(made.ok());
+  EXPECT_NE(made.status().message().find("diffdrive"), std::string::npos)
+      << made.status().message();
+  EXPECT_EQ(MakeModel("bicycle").value()->name(), "bicycle");
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ kincal::controls_t DiffDrive(double left, double right) {
 }
 
 struct Fixture {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   Publisher publisher;  // not opened: nothing is published or recorded
   BoundedQueue<ControlSample> queue{16, FullPolicy::kDropOldest};
   CounterSet counters;

@@ -227,7 +227,7 @@ void ExpectCalibrationIsAnalyzeOfTheLog(const Replayed& r, const std::string& ef
   o.effects_mode = effects_mode;
   o.init = {{"k_v", 1.0}, {"k_omega", 1.0}};
   const AnalyzeResult offline =
-      Analyze(ReadLcmLog(r.log, *MakeModel("unicycle")).value(), o).value();
+      Analyze(ReadLcmLog(r.log, *MakeModel("unicycle").value()).value(), o).value();
   ASSERT_EQ(c.num_params, static_cast<int>(offline.after.params.size())) << c.model;
   EXPECT_EQ(c.effects, offline.after.effects);
   for (int i = 0; i < c.num_params; ++i) {

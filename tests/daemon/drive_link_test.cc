@@ -87,7 +87,7 @@ TEST(DriveLink, TheLegKeepsTheTargetInViewFromWhereTheRobotStands) {
   const Eigen::Vector3d pose(0.75, 0.0, 0.0);  // 25 cm from the edge, heading at it
   ControlSignal leg;
   ASSERT_TRUE(link.NextLeg(pose, 50.0, 1s, &leg).ok());
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   const Checkpoint e = Estimate(0);
   StateVec x = sys.MakeState(pose.x(), pose.y(), pose.z(),
                              Eigen::Map<const Eigen::VectorXd>(e.values.data(), 3), leg, 0.0);

@@ -38,7 +38,7 @@ TEST(FilterSetup, TheDrawingWinsOverTheCheckpointResumed) {
   DaemonConfig c;
   c.robot.guess = {{"d", 0.35}};
   c.robot.fixed = {{"d", 0.3}};
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   const int b = sys.ParamIndex("d"), rl = sys.ParamIndex("r_l");
   Checkpoint ck;
   ck.names = {"r_l", "d"};
@@ -56,7 +56,7 @@ TEST(FilterSetup, TheDrawingWinsOverTheCheckpointResumed) {
 // --resume: nothing named, nothing read; a missing file and a checkpoint of another model
 // are errors naming the file.
 TEST(FilterSetup, TheCheckpointResumedIsReadAndItsModelChecked) {
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   DaemonConfig c;
   const StatusOr<std::optional<Checkpoint>> none = ReadResumed(c, sys);
   ASSERT_TRUE(none.ok()) << none.status().message();
@@ -80,7 +80,8 @@ TEST(FilterSetup, TheCheckpointResumedIsReadAndItsModelChecked) {
                                           "'diffdrive'"),
             std::string::npos)
       << other.status().message();
-  const StatusOr<std::optional<Checkpoint>> same = ReadResumed(c, MakeSystem("unicycle", {}));
+  const StatusOr<std::optional<Checkpoint>> same =
+      ReadResumed(c, MakeSystem("unicycle", {}).value());
   ASSERT_TRUE(same.ok()) << same.status().message();
   ASSERT_TRUE(same->has_value());
   EXPECT_EQ(same.value()->values, ck.values);

@@ -24,7 +24,7 @@ StageScenario Scenario() {
 // Runs the merge on its own thread while this one queues every pose first and the
 // controls 50 ms later: in lossless mode the poses must wait for their controls.
 StageRun RunMerged(const StageScenario& sc, bool lossless) {
-  const System est = MakeSystem(sc.model, sc.declared);
+  const System est = MakeSystem(sc.model, sc.declared).value();
   auto samples = online_test::Simulate(sc);
   BoundedQueue<PoseSample> poses(samples.poses.size(), FullPolicy::kBlock);
   BoundedQueue<ControlSample> controls(samples.controls.size(), FullPolicy::kBlock);

@@ -19,7 +19,7 @@ namespace {
 using testing::AllModelScenarios;
 
 TEST(Bound, OneConstantControlRunCannotSeparateRadiiAndTrack) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   ControlSignal u(2, 0);
   const std::array<double, 2> w = {10.0, 20.0};
   AppendConstant(&u, 0, SecondsToNs(10.0), w);
@@ -41,7 +41,7 @@ TEST(Bound, OneConstantControlRunCannotSeparateRadiiAndTrack) {
 TEST(Bound, BatchSpreadMatchesCramerRao) {
   // 40 Monte-Carlo repetitions of one design: the empirical variance of the batch
   // estimates must agree with the bound (within the sampling error of 40 samples).
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const auto sc = AllModelScenarios()[0];
   const VecN<kMaxState> truth = testing::ToVec(sc.truth);
   std::mt19937_64 rng(9);
@@ -66,7 +66,7 @@ TEST(Bound, BatchSpreadMatchesCramerRao) {
 }
 
 TEST(Batch, RecoversTheTruthWithin3SigmaFromAStart5PercentOff) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const auto sc = AllModelScenarios()[0];
   const VecN<kMaxState> truth = testing::ToVec(sc.truth);
   std::mt19937_64 rng(21);
@@ -86,7 +86,7 @@ TEST(Batch, RecoversTheTruthWithin3SigmaFromAStart5PercentOff) {
 // A held parameter (a measured track width) stays where it was put, has no variance, and
 // the others are still fitted to the truth; the profiled and robust covariances agree.
 TEST(Batch, FixedParameterIsHeldAndHasNoVariance) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const auto sc = AllModelScenarios()[0];
   const VecN<kMaxState> truth = testing::ToVec(sc.truth);
   std::mt19937_64 rng(22);
@@ -123,7 +123,7 @@ TEST(Batch, FixedParameterIsHeldAndHasNoVariance) {
 // Bad data is a status naming the problem, never an exception (callers used to catch any
 // std::exception as "the fit failed").
 TEST(Batch, BadInputsAreStatusesThatSayWhatIsWrong) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const auto sc = AllModelScenarios()[0];
   const VecN<kMaxState> truth = testing::ToVec(sc.truth);
   std::mt19937_64 rng(3);
@@ -172,7 +172,7 @@ std::vector<Eigen::Vector3d> Measure(const System& sys, const ControlSignal& u,
 }
 
 TEST(Bound, EqualsTheInverseFisherInformationByFiniteDifferences) {
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   const Eigen::Vector3d p(kThesisRL, kThesisRR, kThesisD);
   // Four of the thesis's runs (constant wheel rates, a second apart), 6 Hz frames.
   ControlSignal u(2, 0);

@@ -14,7 +14,7 @@ namespace {
 // Straight-line driving does not excite the track width d: the covariance is rank
 // deficient, and Ceres says so through glog. That must reach kincal's log, not stderr.
 TEST(CeresLogging, RankDeficientCovarianceWarningsGoToOurLogNotStderr) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   ControlSignal u(2, 0);
   const double both[2] = {10.0, 10.0};
   AppendConstant(&u, 0, SecondsToNs(5.0), both);

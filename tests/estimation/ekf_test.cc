@@ -11,7 +11,7 @@ namespace {
 TEST(Ekf, KalmanOnALinearMeasurement) { testing::ExpectKalmanOnALinearMeasurement("ekf"); }
 
 TEST(Ekf, FirstOrderThroughThePolarTransform) {
-  auto f = MakeFilter("ekf");
+  auto f = MakeFilter("ekf").value();
   EXPECT_EQ(f->name(), "ekf");
   const double sr = 0.02, sb = 0.35;
   f->Initialize(Eigen::Vector2d(1.0, M_PI / 2),

@@ -81,7 +81,7 @@ TEST(LinearGaussian, EveryFilterEqualsTheKalmanFilter) {
   }
 
   for (const char* name : {"dd2", "ekf", "ukf"}) {
-    auto f = MakeFilter(name);
+    auto f = MakeFilter(name).value();
     f->Initialize(x0, StateMat(P0));
     const LinearProcess proc;
     const LinearMeasurement meas;
@@ -100,5 +100,14 @@ TEST(LinearGaussian, EveryFilterEqualsTheKalmanFilter) {
     EXPECT_LT(rel_p, 1e-8) << name;
   }
 }
+
+TEST(FilterRegistry, AnUnknownNameIsAnErrorNamingTheKnownFilters) {
+  const auto made = MakeFilter("kalman9000");
+  ASSERT_FALSE(made.ok());
+  EXPECT_NE(made.status().message().find("unknown filter 'kalman9000'"), std::string::npos);
+  EXPECT_NE(made.status().message().find("ukf"), std::string::npos) << made.status().message();
+  EXPECT_TRUE(MakeFilter("dd2").ok());
+}
+
 }  // namespace
 }  // namespace kincal

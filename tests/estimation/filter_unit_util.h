@@ -30,7 +30,7 @@ class SumOfTwo final : public MeasurementFunction {
 // K = [1, 4] / 6, mean [0.5, 2], P = [[5/6, -2/3], [-2/3, 4/3]], NIS 1.5. Every filter
 // must give the Kalman answer on a linear measurement.
 inline void ExpectKalmanOnALinearMeasurement(const char* name) {
-  auto f = MakeFilter(name);
+  auto f = MakeFilter(name).value();
   f->Initialize(Eigen::Vector2d::Zero(), StateMat(Eigen::Vector2d(1.0, 4.0).asDiagonal()));
   MeasVec z(1);
   z << 3.0;

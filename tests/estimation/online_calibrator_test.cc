@@ -19,7 +19,7 @@ using testing::Simulate;
 using testing::ToVec;
 
 struct SimulatedUnicycle {
-  System sys = MakeSystem("unicycle");
+  System sys = MakeSystem("unicycle").value();
   VecN<kMaxState> truth = ToVec({1.06, 0.93});
   testing::SimData data;
   SimulatedUnicycle() {
@@ -124,7 +124,7 @@ TEST(OnlineCalibrator, PredictionMovesTheTimeAndGrowsThePoseUncertainty) {
 }
 
 TEST(OnlineCalibrator, BadOptionsAreNamed) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   OnlineCalibratorOptions o;
   o.filter = "kalman9";
   std::string error;

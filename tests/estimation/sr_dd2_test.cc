@@ -35,7 +35,7 @@ TEST(Nonlinear, Dd2MatchesMonteCarloBetterThanEkf) {
   double mean_err[2], cov_err[2];
   int k = 0;
   for (const char* name : {"dd2", "ekf"}) {
-    auto f = MakeFilter(name);
+    auto f = MakeFilter(name).value();
     f->Initialize(mean, StateMat(sigma.array().square().matrix().asDiagonal()));
     f->Predict(PolarToCartesian(), NoiseMat::Zero(1, 1));
     mean_err[k] = (f->mean() - m).norm();

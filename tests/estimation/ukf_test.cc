@@ -11,7 +11,7 @@ namespace {
 TEST(Ukf, KalmanOnALinearMeasurement) { testing::ExpectKalmanOnALinearMeasurement("ukf"); }
 
 TEST(Ukf, SecondOrderThroughThePolarTransform) {
-  auto f = MakeFilter("ukf");
+  auto f = MakeFilter("ukf").value();
   EXPECT_EQ(f->name(), "ukf");
   const double sr = 0.02, sb = 0.35;
   f->Initialize(Eigen::Vector2d(1.0, M_PI / 2),

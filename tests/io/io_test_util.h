@@ -45,8 +45,8 @@ class IoTest : public ::testing::Test {
     return p;
   }
   std::string Error(const std::string& controls, const std::string& poses) {
-    const StatusOr<Recording> r =
-        ReadCsvRecording(Write("c.csv", controls), Write("p.csv", poses), *MakeModel("unicycle"));
+    const StatusOr<Recording> r = ReadCsvRecording(Write("c.csv", controls), Write("p.csv", poses),
+                                                   *MakeModel("unicycle").value());
     return r.ok() ? std::string("no error") : r.status().message();
   }
   std::filesystem::path dir_;

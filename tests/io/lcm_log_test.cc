@@ -39,14 +39,14 @@ TEST_F(LcmLog, ReadsBack) {
       PutMessage(log, "KINCAL_POSE", p, p.utime);
     }
   }
-  const Recording r = ReadLcmLog(path, *MakeModel("unicycle")).value();
+  const Recording r = ReadLcmLog(path, *MakeModel("unicycle").value()).value();
   EXPECT_EQ(r.controls.size(), 5u);
   EXPECT_EQ(r.poses.size(), 5u);
   EXPECT_DOUBLE_EQ(r.origin_s, 1.0);
   EXPECT_EQ(r.controls.At(0.45)[0], 0.5);           // v, mapped by name
   EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);  // omega
   EXPECT_NEAR(r.poses[2].z.x(), 0.1, 1e-12);
-  EXPECT_FALSE(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle")).ok());
+  EXPECT_FALSE(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle").value()).ok());
 }
 
 TEST_F(LcmLog, DamagedIsReadWithWarnings) {
@@ -74,7 +74,7 @@ TEST_F(LcmLog, DamagedIsReadWithWarnings) {
   std::string b(std::istreambuf_iterator<char>(in), {});
   in.close();
   Write("run.lcm", b.substr(0, b.size() - 5));  // the last pose cut short
-  const Recording r = ReadLcmLog(path, *MakeModel("unicycle")).value();
+  const Recording r = ReadLcmLog(path, *MakeModel("unicycle").value()).value();
   EXPECT_EQ(r.controls.size(), 4u);
   EXPECT_EQ(r.poses.size(), 3u);
   ASSERT_EQ(r.warnings.size(), 1u);

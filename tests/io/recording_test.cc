@@ -30,7 +30,7 @@ TEST_F(RecordingCsv, NonNumericValueNamesLineAndColumn) {
 // Issue 34: files from Windows tools (CRLF) and spreadsheets (a UTF-8 byte-order mark) read
 // as their LF twins; what is invisible in a bad token is shown escaped.
 TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
-  const auto model = MakeModel("unicycle");
+  const auto model = MakeModel("unicycle").value();
   const std::string c = "t,v,omega\n0,1,0\n1,1,0.5\n2,1,0\n";
   const std::string p = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0.1,0.2\n";
   const Recording plain = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model).value();
@@ -101,11 +101,13 @@ TEST_F(RecordingCsv, EmptyFileAndWrongRowLength) {
 // Reproduces issue 16 (items 9 and 13): a directory given as a CSV said "empty file", and
 // --poses /dev/zero read one endless line (3.9 GB in 10 s).
 TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
-  std::string e = ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle"))
-                      .status()
-                      .message();
+  std::string e =
+      ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle").value())
+          .status()
+          .message();
   EXPECT_NE(e.find("is a directory, expected a text file"), std::string::npos) << e;
-  e = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero", *MakeModel("unicycle"))
+  e = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero",
+                       *MakeModel("unicycle").value())
           .status()
           .message();
   EXPECT_NE(e.find("/dev/zero:1: line longer than 65536 bytes"), std::string::npos) << e;
@@ -114,7 +116,7 @@ TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
 TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
                                        Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),
-                                       *MakeModel("unicycle"))
+                                       *MakeModel("unicycle").value())
                           .value();
   EXPECT_EQ(r.stats.control_repeated_times, 1);
   EXPECT_EQ(r.stats.pose_repeated_times, 1);
@@ -125,10 +127,10 @@ TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
 }
 
 TEST_F(RecordingCsv, HeadingInDegreesIsFlagged) {
-  const Recording r =
-      ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
-                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"), *MakeModel("unicycle"))
-          .value();
+  const Recording r = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n"),
+                                       Write("p.csv", "t,x,y,theta\n0,0,0,90\n1,1,0,180\n"),
+                                       *MakeModel("unicycle").value())
+                          .value();
   ASSERT_EQ(r.warnings.size(), 1u);
   EXPECT_NE(r.warnings[0].find("theta reaches 180; kincal expects radians"), std::string::npos)
       << r.warnings[0];

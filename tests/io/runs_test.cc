@@ -67,7 +67,7 @@ TEST_F(Runs, CsvRunColumnInAnyPositionGivesRuns) {
           Write("c.csv", "run,t,omega,v\n1,0,0,1\n1,1,0,1\n1,2,0,1\n2,0,0,2\n2,1,0,2\n"),
           Write("p.csv",
                 "t,x,y,theta,run\n0,0,0,0,1\n1,1,0,0,1\n2,2,0,0,1\n0,5,5,0,2\n1,7,5,0,2\n"),
-          *MakeModel("unicycle"))
+          *MakeModel("unicycle").value())
           .value();
   ASSERT_EQ(rec.runs.size(), 2u);
   EXPECT_EQ(rec.runs[1].start_ns, SecondsToNs(2.0 + kRunGapS));
@@ -77,7 +77,7 @@ TEST_F(Runs, CsvRunColumnInAnyPositionGivesRuns) {
 }
 
 TEST_F(Runs, BadRunColumnsAreNamedErrors) {
-  const auto model = MakeModel("unicycle");
+  const auto model = MakeModel("unicycle").value();
   auto error = [&](const std::string& c, const std::string& p) -> std::string {
     const StatusOr<Recording> r = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model);
     return r.ok() ? std::string("no error") : r.status().message();
@@ -127,7 +127,7 @@ TEST_F(Runs, LcmLogRunMarkersGiveRuns) {
       }
     }
   }
-  const Recording rec = ReadLcmLog(path, *MakeModel("unicycle")).value();
+  const Recording rec = ReadLcmLog(path, *MakeModel("unicycle").value()).value();
   ASSERT_EQ(rec.runs.size(), 2u);
   EXPECT_EQ(rec.runs[0].start_ns, 0);
   EXPECT_EQ(rec.runs[1].start_ns, SecondsToNs(10.0));

@@ -36,7 +36,7 @@ BatchCalibration GoodBatch() {
 }
 
 TEST(EstimateMessages, ParamsCarryValuesSigmasAndTheWholeCovarianceByName) {
-  const System sys = MakeSystem("diffdrive", {"time_offset"});
+  const System sys = MakeSystem("diffdrive", {"time_offset"}).value();
   StateVec x = StateVec::Zero(sys.state_dim());
   const int off = sys.param_offset();
   x.segment(off, 4) << 0.031, 0.0313, 0.148, 0.12;

@@ -13,7 +13,7 @@ namespace kincal {
 namespace {
 
 TEST(FilterPrior, AGuessHasItsSigmaFractionAndHeldParametersArePinned) {
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   const int rl = sys.ParamIndex("r_l"), b = sys.ParamIndex("d");
   ASSERT_GE(rl, 0);
   ASSERT_GE(b, 0);
@@ -32,7 +32,7 @@ TEST(FilterPrior, AGuessHasItsSigmaFractionAndHeldParametersArePinned) {
 }
 
 TEST(FilterPrior, ACheckpointIsResumedByNameAndAHeldOneKeepsThisRunsSpread) {
-  const System sys = MakeSystem("diffdrive", {});
+  const System sys = MakeSystem("diffdrive", {}).value();
   FilterPrior p = GuessedPrior(sys, {}, 0.2, {}, "test");
   const int rl = sys.ParamIndex("r_l"), rr = sys.ParamIndex("r_r"), b = sys.ParamIndex("d");
   const double b_var = p.covariance(b, b);

@@ -75,7 +75,7 @@ struct Samples {
   std::vector<PoseSample> poses;
 };
 inline Samples Simulate(const StageScenario& sc) {
-  const System truth = MakeSystem(sc.model, sc.hidden);
+  const System truth = MakeSystem(sc.model, sc.hidden).value();
   testing::ModelScenario range;
   for (const auto& m : testing::AllModelScenarios()) {
     if (m.model == sc.model) range = m;
@@ -148,7 +148,7 @@ inline FilterOutputs Collect(StageRun* run) {
 // the scenario).
 inline StageRun RunStageOn(const Samples& samples, const StageScenario& sc,
                            FilterStageOptions options) {
-  const System est = MakeSystem(sc.model, sc.declared);
+  const System est = MakeSystem(sc.model, sc.declared).value();
   options.effects = sc.declared;
   options.auto_effects = sc.auto_effects;
   options.fixed = sc.fixed;

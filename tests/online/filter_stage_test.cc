@@ -199,7 +199,7 @@ TEST(FilterStageAutoEffects, NeverAddsAnEffectToACleanRobot) {
   for (const auto& m : kincal::testing::AllModelScenarios()) {
     StageScenario sc;
     sc.model = m.model;
-    const System sys = MakeSystem(m.model);
+    const System sys = MakeSystem(m.model).value();
     for (size_t i = 0; i < m.truth.size(); ++i) {
       const std::string& name = sys.params()[i].name;
       sc.truth[name] = m.truth[i];
@@ -267,7 +267,7 @@ AnalyzeResult Offline(const StageScenario& sc, const std::string& effects_mode) 
   o.base_effects = sc.declared;
   o.effects_mode = effects_mode;
   o.init = sc.guess;
-  const int nc = MakeSystem(sc.model).num_controls();
+  const int nc = MakeSystem(sc.model).value().num_controls();
   return Analyze(online_test::ToRecording(online_test::Simulate(sc), nc), o).value();
 }
 

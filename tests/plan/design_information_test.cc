@@ -50,8 +50,9 @@ Design MakeDesign(const System& sys, const Eigen::VectorXd& p, const std::vector
 // A lag's state is at rest where a segment starts (a robot put down); BoundAt warms it up
 // through the command history instead, so the lag is compared on one segment from rest.
 void ExpectSameCovariance(const std::vector<double>& seg_s, bool lag) {
-  const System sys = lag ? MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"})
-                         : MakeSystem("diffdrive", {"time_offset", "lever_arm"});
+  const System sys =
+      lag ? MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value()
+          : MakeSystem("diffdrive", {"time_offset", "lever_arm"}).value();
   Eigen::VectorXd p(sys.num_params()), prior_sigma(sys.num_params());
   if (lag) {
     p << 0.03, 0.031, 0.3, 0.12, 0.04, 0.05, -0.02, 0.01;
@@ -100,7 +101,7 @@ TEST(DesignInformation, EqualsTheBatchBoundOverSegmentsWithFreeStarts) {
 // the start), and the central difference took that jump for information: a zero delay
 // came out known to a microsecond from 2 mm poses. Started at rest it is not.
 TEST(DesignInformation, AZeroDelayIsNotKnownFromTheFirstCommand) {
-  const System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset"});
+  const System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset"}).value();
   Eigen::VectorXd p(sys.num_params()), prior_sigma(sys.num_params());
   p << 0.03, 0.03, 0.3, 0.1, 0.0;
   prior_sigma << 1e-3, 1e-3, 1e-2, 0.1, 0.1;

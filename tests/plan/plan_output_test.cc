@@ -18,7 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 
 TEST(PlanOutput, CsvReadsBackAndJsonHasEveryMotion) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const Eigen::Vector3d p(0.03, 0.03, 0.3);
   const Eigen::Matrix3d prior = Eigen::Vector3d(1e-6, 1e-6, 1e-4).asDiagonal();
   PlanOptions o;

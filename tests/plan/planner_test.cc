@@ -27,7 +27,7 @@ struct Case {
 
 // The reference case: lengths to 0.1 %, lag and delay to 3 ms, lever arm to 2 mm.
 Case Reference(double duration_s) {
-  Case c{MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}), {}, {}, {}};
+  Case c{MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value(), {}, {}, {}};
   c.p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
   c.prior_sigma = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05).finished();
   c.o.duration_s = duration_s;
@@ -39,7 +39,7 @@ Case Reference(double duration_s) {
 }
 
 Case UnicycleWithLag(double duration_s) {
-  Case u{MakeSystem("unicycle", {"actuator_lag"}), {}, {}, {}};
+  Case u{MakeSystem("unicycle", {"actuator_lag"}).value(), {}, {}, {}};
   u.p = (Eigen::VectorXd(3) << 1.0, 1.0, 0.15).finished();
   u.prior_sigma = (Eigen::VectorXd(3) << 0.1, 0.1, 0.1).finished();
   u.o.duration_s = duration_s;
@@ -50,7 +50,7 @@ Case UnicycleWithLag(double duration_s) {
 }
 
 Case Tricycle(double duration_s) {
-  Case t{MakeSystem("tricycle"), {}, {}, {}};
+  Case t{MakeSystem("tricycle").value(), {}, {}, {}};
   t.p = (Eigen::VectorXd(4) << 0.001, 0.0, 1e-4, 0.5).finished();
   t.prior_sigma = (Eigen::VectorXd(4) << 1e-4, 0.03, 1e-5, 0.05).finished();
   t.o.duration_s = duration_s;
@@ -89,7 +89,7 @@ double SpeedUp(const Case& c, const Workspace& ws, const char* label) {
 // A held parameter (a car's wheelbase from the drawing) is known to the plan: its value is
 // the design point's, its prior sigma negligible, and it is not scored.
 TEST(Plan, HeldParametersAreKnownAndNotScored) {
-  const System sys = MakeSystem("bicycle");
+  const System sys = MakeSystem("bicycle").value();
   Eigen::VectorXd p(4);
   p << 1.0, 1.0, 0.0, 0.33;
   Eigen::MatrixXd prior = Eigen::MatrixXd::Identity(4, 4) * 0.01;

@@ -18,7 +18,7 @@ TEST(Shaping, TwistToControlsForEveryModel) {
       {"tricycle", {0.001, 0.02, 1e-4, 0.5}, {1000.0, 8000.0}},
   };
   for (const auto& c : cases) {
-    const System sys = MakeSystem(c.model);
+    const System sys = MakeSystem(c.model).value();
     const Eigen::VectorXd p = Eigen::Map<const Eigen::VectorXd>(c.p.data(), c.p.size());
     PlanOptions o;
     o.max_abs = c.max_abs;
@@ -32,7 +32,7 @@ TEST(Shaping, TwistToControlsForEveryModel) {
     }
   }
   // Beyond the limits: the nearest the box allows, and false.
-  const System dd = MakeSystem("diffdrive");
+  const System dd = MakeSystem("diffdrive").value();
   PlanOptions o;
   o.max_abs = {10.0, 10.0};
   Values u{};

@@ -12,7 +12,7 @@ namespace kincal {
 namespace {
 
 TEST(UsualMotions, AreWhatTheirNamesSay) {
-  const System sys = MakeSystem("diffdrive", {"actuator_lag"});
+  const System sys = MakeSystem("diffdrive", {"actuator_lag"}).value();
   const Eigen::Vector4d p(0.03, 0.03, 0.3, 0.1);
   const Eigen::Matrix4d prior = Eigen::Vector4d(1e-6, 1e-6, 1e-4, 1e-2).asDiagonal();
   PlanOptions o;

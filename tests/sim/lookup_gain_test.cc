@@ -9,7 +9,7 @@ namespace kincal {
 namespace {
 
 TEST(LookupTableGain, ScalesEachWheelByItsSpeedBand) {
-  const System bare = MakeSystem("diffdrive");
+  const System bare = MakeSystem("diffdrive").value();
   const auto effect = MakeLookupTableGain(bare.model(), 3, 10.0);
   ASSERT_EQ(effect->num_params(), 6);
   EXPECT_EQ(effect->params()[0].name, "g_omega_l_0");
@@ -29,7 +29,7 @@ TEST(LookupTableGain, ScalesEachWheelByItsSpeedBand) {
 
 // Through System: the robot drives as the bare model with the band's gain on each wheel.
 TEST(LookupTableGain, PropagatesAsScaledWheelRates) {
-  const System bare = MakeSystem("diffdrive");
+  const System bare = MakeSystem("diffdrive").value();
   const System with(bare.model_ptr(), {MakeLookupTableGain(bare.model(), 2, 10.0)});
   ControlSignal u(2, 0);
   const std::array<double, 2> c = {4.0, 12.0};

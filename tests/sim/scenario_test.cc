@@ -42,7 +42,7 @@ TEST(Scenario, NegativeDurationIsRejected) {
 }
 
 TEST(Scenario, ParamsByNameOverTheModelsDefaults) {
-  const System sys = MakeSystem("diffdrive");
+  const System sys = MakeSystem("diffdrive").value();
   const VecN<kMaxState> p = ParamsFrom(sys, {{"d", 0.2}}, "truth").value();
   EXPECT_EQ(p[2], 0.2);
   EXPECT_EQ(p[0], sys.params()[0].default_value);

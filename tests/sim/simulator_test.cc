@@ -54,7 +54,7 @@ TEST(Profiles, RandomCommandsStayInTheirRange) {
 }
 
 TEST(Truth, FollowsTheArcAndMeasurementsScatterAsConfigured) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   ControlSignal u(2, 0);
   const std::array<double, 2> go = {0.5, 0.25};
   AppendConstant(&u, 0, SecondsToNs(100.0), go);

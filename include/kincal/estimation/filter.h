@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "kincal/registry.h"
+#include "kincal/status.h"
 #include "kincal/types.h"
 
 namespace kincal {
@@ -74,8 +75,8 @@ using FilterRegistry = Registry<Filter>;
 // The filters in the one explicit list, src/estimation/filter_list.cc.
 void RegisterBuiltins(Registry<Filter>* registry);
 
-// Throws std::invalid_argument naming the known filters if `name` is unknown.
-std::unique_ptr<Filter> MakeFilter(std::string_view name);
+// Creates a registered filter; an unknown name is an error naming the known filters.
+StatusOr<std::unique_ptr<Filter>> MakeFilter(std::string_view name);
 
 // Lower-triangular L (n x n) with L L^T = A A^T, by Householder reflections on A^T
 // (A is n x m, m >= n). Diagonal made non-negative.

@@ -10,7 +10,7 @@ namespace kincal {
 namespace {
 
 TEST(ActuatorLag, FollowsFirstOrderResponseExactly) {
-  const System sys = MakeSystem("unicycle", {"actuator_lag[v]"});
+  const System sys = MakeSystem("unicycle", {"actuator_lag[v]"}).value();
   ControlSignal u(2, 0);
   const std::array<double, 2> go = {1.0, 0.0};
   u.Append(SecondsToNs(1.0), go);

@@ -12,7 +12,7 @@ using testing::ArcPose;
 using testing::PoseAfter;
 
 TEST(AsymmetricGain, ForwardAndBackwardGainsDiffer) {
-  const System sys = MakeSystem("unicycle", {"asymmetric_gain[v]"});
+  const System sys = MakeSystem("unicycle", {"asymmetric_gain[v]"}).value();
   const std::vector<double> p = {0.9, 0.85, 0.04};
   EXPECT_NEAR(PoseAfter(sys, p, {0.5, 0.0}, 1.0)[0], 0.9 * 0.5 * 1.04, 1e-12);
   EXPECT_NEAR(PoseAfter(sys, p, {-0.5, 0.0}, 1.0)[0], -0.9 * 0.5 * 0.96, 1e-12);

@@ -12,7 +12,7 @@ using testing::ArcPose;
 using testing::PoseAfter;
 
 TEST(Backlash, TheWheelLagsTheCommandByHalfThePlayAndHoldsInsideIt) {
-  const System sys = MakeSystem("ackermann", {"backlash"});
+  const System sys = MakeSystem("ackermann", {"backlash"}).value();
   // r_b 0.05 m, l 0.3 m, no steering offset, 0.04 rad of play; 10 rad/s.
   ControlSignal u(2, 0);
   const std::vector<double> c1 = {10.0, 0.2}, c2 = {10.0, 0.19}, c3 = {10.0, 0.1};

@@ -12,7 +12,7 @@ using testing::ArcPose;
 using testing::PoseAfter;
 
 TEST(DeadBand, SmallCommandsGiveNoMotionAndLargeOnesLoseTheBand) {
-  const System sys = MakeSystem("unicycle", {"dead_band[v]"});
+  const System sys = MakeSystem("unicycle", {"dead_band[v]"}).value();
   const std::vector<double> p = {1.0, 1.0, 0.1};
   EXPECT_EQ(PoseAfter(sys, p, {0.05, 0.0}, 2.0)[0], 0.0);
   EXPECT_NEAR(PoseAfter(sys, p, {0.3, 0.0}, 2.0)[0], 0.4, 1e-12);

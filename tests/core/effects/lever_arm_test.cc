@@ -10,7 +10,7 @@ namespace kincal {
 namespace {
 
 TEST(LeverArm, MovesTheMeasuredPoint) {
-  const System sys = MakeSystem("unicycle", {"lever_arm"});
+  const System sys = MakeSystem("unicycle", {"lever_arm"}).value();
   StateVec x(sys.state_dim());
   x << 1.0, 2.0, M_PI / 2, 1.0, 1.0, 0.1, 0.02, 0.05;
   double z[3];

@@ -10,7 +10,7 @@ namespace kincal {
 namespace {
 
 TEST(TimeOffset, DelaysTheMotion) {
-  const System sys = MakeSystem("unicycle", {"time_offset"});
+  const System sys = MakeSystem("unicycle", {"time_offset"}).value();
   ControlSignal u(2, 0);
   const std::array<double, 2> go = {1.0, 0.0};
   u.Append(SecondsToNs(1.0), go);

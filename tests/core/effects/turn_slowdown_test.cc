@@ -12,7 +12,7 @@ using testing::ArcPose;
 using testing::PoseAfter;
 
 TEST(TurnSlowdown, TurningDividesTheForwardSpeed) {
-  const System sys = MakeSystem("unicycle", {"turn_slowdown"});
+  const System sys = MakeSystem("unicycle", {"turn_slowdown"}).value();
   // k_v 1, k_omega 1, c_slow 0.4 s/rad; 1 m/s while turning at 0.5 rad/s.
   const Eigen::Vector3d pose = PoseAfter(sys, {1.0, 1.0, 0.4}, {1.0, 0.5}, 2.0);
   EXPECT_LT((pose - ArcPose(1.0 / 1.2, 0.0, 0.5, 2.0)).norm(), 1e-12);
@@ -22,7 +22,7 @@ TEST(TurnSlowdown, TurningDividesTheForwardSpeed) {
 }
 
 TEST(TurnSlowdown, StraightDrivingIsUnchanged) {
-  const System sys = MakeSystem("unicycle", {"turn_slowdown"});
+  const System sys = MakeSystem("unicycle", {"turn_slowdown"}).value();
   EXPECT_NEAR(PoseAfter(sys, {0.9, 1.0, 0.4}, {1.0, 0.0}, 2.0)[0], 1.8, 1e-12);
 }
 

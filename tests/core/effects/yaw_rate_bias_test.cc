@@ -12,13 +12,13 @@ using testing::ArcPose;
 using testing::PoseAfter;
 
 TEST(YawRateBias, MovingStraightCurvesByTheBias) {
-  const System sys = MakeSystem("unicycle", {"yaw_rate_bias"});
+  const System sys = MakeSystem("unicycle", {"yaw_rate_bias"}).value();
   const Eigen::Vector3d pose = PoseAfter(sys, {1.0, 1.0, 0.02}, {1.0, 0.0}, 2.0);
   EXPECT_LT((pose - ArcPose(1.0, 0.0, 0.02, 2.0)).norm(), 1e-12);
 }
 
 TEST(YawRateBias, StandingStillDoesNotTurn) {
-  const System sys = MakeSystem("unicycle", {"yaw_rate_bias"});
+  const System sys = MakeSystem("unicycle", {"yaw_rate_bias"}).value();
   EXPECT_EQ(PoseAfter(sys, {1.0, 1.0, 0.02}, {0.0, 0.0}, 2.0).norm(), 0.0);
 }
 

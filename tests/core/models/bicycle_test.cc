@@ -34,7 +34,7 @@ TEST(Bicycle, OffsetAloneCurvesAndReversingTurnsTheOtherWay) {
 // A held command is a circle: the integrated pose is the closed-form arc (exact
 // integration, not a small-step approximation).
 TEST(Bicycle, HeldCommandIntegratesToTheClosedFormArc) {
-  const System sys = MakeSystem("bicycle");
+  const System sys = MakeSystem("bicycle").value();
   const std::vector<double> p = {1.1, 0.8, 0.01, 0.33};
   const double v = 1.1 * 1.5, omega = v * std::tan(0.8 * 0.25 + 0.01) / 0.33;
   for (double t : {0.1, 1.0, 4.0}) {

@@ -16,7 +16,7 @@ TEST(Unicycle, GainsScaleTheCommandedSpeedAndTurnRate) {
 }
 
 TEST(Unicycle, PropagationFollowsTheArc) {
-  const System sys = MakeSystem("unicycle");
+  const System sys = MakeSystem("unicycle").value();
   const Eigen::Vector3d pose = testing::PoseAfter(sys, {0.9, 0.85}, {0.5, 0.4}, 2.0);
   EXPECT_LT((pose - testing::ArcPose(0.45, 0.0, 0.34, 2.0)).norm(), 1e-12);
 }
