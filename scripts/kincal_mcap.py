@@ -18,7 +18,8 @@ event's time (log time) and the message's utime (the schema's timestamp):
 
 and, derived: "/<markers channel>/preview" (the same annotations on the preview's pixels,
 for the frame the preview shows) and "/tf" (foxglove.FrameTransform floor -> robot, one per
-valid pose). Channels are recognised by their LCM type, whatever their names.
+valid pose). Channels are recognised by their LCM type, whatever their names. `kincal view
+--foxglove` serves the same topics live (Exporter on a WebSocket server's context).
 
 The MCAP is written to a temporary file beside --out and renamed over it (never through a
 symbolic link); an input that is not a kincal recording, or a damaged one, is a named
@@ -150,7 +151,11 @@ class Exporter:
             m = cls.decode(data)
         except Exception as e:  # the generated decoder's errors are ValueError or struct.error
             raise ExportError(f"channel {channel!r}: a {cls.__name__} that does not decode: {e}") from e
-        getattr(self, "on_" + cls.__name__, self.on_json)(channel, m, log_time)
+        self.message(channel, m, log_time)
+
+    def message(self, channel, m, log_time):
+        """A decoded kincal message onto its topics (also `kincal view --foxglove`'s path)."""
+        getattr(self, "on_" + type(m).__name__, self.on_json)(channel, m, log_time)
 
     def on_json(self, channel, m, log_time):
         name = "kincal." + type(m).__name__

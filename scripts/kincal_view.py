@@ -16,6 +16,13 @@ otherwise) or by a recording (`--log FILE`, with play/pause and a time slider):
     drops, gated poses, latency, resets) and the guidance's advice;
   * "no frames yet" / "daemon not heard for N s" instead of a stale picture.
 
+With `--foxglove [PORT]` (live only) it also serves kincald's channels to the Foxglove app
+(or Lichtblick) over Foxglove's WebSocket protocol, through foxglove-sdk's server, with the
+topics and schemas `kincal export --format mcap` writes (the picture as CompressedImage,
+markers and target as ImageAnnotations, the pose as PoseInFrame and /tf, the rest as JSON):
+"Open connection" in the app, ws://127.0.0.1:8766 by default. A recording opens in
+Foxglove as the MCAP file that command writes.
+
 Read-only: nothing on the page reaches kincald (the playback controls move this page's
 own cursor in a recording). It binds 127.0.0.1 unless `--bind` says otherwise. Every
 browser gets the newest state at up to `--rate` updates a second; a slow one misses
@@ -46,6 +53,9 @@ from kincal_markers import target_outline
 HERE = os.path.dirname(os.path.abspath(__file__))
 STATIC = os.path.join(HERE, "view")
 DEFAULT_PORT = 8765
+# `--foxglove`'s default: beside the page (8765 is also the Foxglove app's own default; the
+# app's "Open connection" takes any ws:// address).
+FOXGLOVE_PORT = DEFAULT_PORT + 1
 MAX_RATE = 30.0         # updates a second to one page at most (new pictures come at once)
 ACK_TIMEOUT_S = 5.0     # a page that has not taken a state for this long gets the next anyway
 HISTORY_EVERY_S = 0.5   # the charts' history goes to a page this often (the rest: the newest)
@@ -240,12 +250,40 @@ class Timeline:
             }
 
 
-class LiveSource:
-    """kincald's LCM, on a thread of its own: decoded into the timeline as it arrives."""
+class FoxgloveLive:
+    """kincald's channels to the Foxglove app as they arrive: kincal_mcap's Exporter (the
+    topics and schemas of `kincal export --format mcap`) on foxglove-sdk's WebSocket server.
+    Logging to a client is the SDK's (bounded per client): a slow app never holds up LCM."""
 
-    def __init__(self, url, timeline):
+    def __init__(self, bind, port):
+        import foxglove
+        from kincal_mcap import Exporter
+        check_port(bind, port)
+        self.context = foxglove.Context()
+        try:
+            self.server = foxglove.start_server(name="kincal view", host=bind, port=port, context=self.context)
+        except Exception as e:  # the SDK raises its own error types
+            raise ViewError(f"cannot serve Foxglove on {bind}:{port}: {e}") from e
+        self.exporter = Exporter(self.context)
+
+    def message(self, channel, m):
+        """Logs one decoded message; returns an error's text (a frame Foxglove cannot show)."""
+        from kincal_mcap import ExportError
+        try:
+            self.exporter.message(channel, m, time.time_ns())
+        except ExportError as e:
+            return str(e)
+        return None
+
+
+class LiveSource:
+    """kincald's LCM, on a thread of its own: decoded into the timeline (and to Foxglove with
+    --foxglove) as it arrives."""
+
+    def __init__(self, url, timeline, foxglove=None):
         import lcm
         self.types = message_types()
+        self.foxglove = foxglove
         try:
             self.lcm = lcm.LCM(url) if url else lcm.LCM()
         except (IOError, OSError, RuntimeError) as e:
@@ -266,6 +304,10 @@ class LiveSource:
             self.timeline.error(channel, f"a {cls.__name__} that does not decode: {e}")
             return
         self.timeline.add(channel, m, getattr(m, "utime", 0))
+        if self.foxglove is not None:
+            error = self.foxglove.message(channel, m)
+            if error:
+                self.timeline.error(channel, error)
 
     def loop(self):
         while not self.stop.is_set():
@@ -509,11 +551,19 @@ def main(argv=None):
     ap.add_argument("--truth", help="a scenario YAML whose truth: map is drawn on the charts (simulations)")
     ap.add_argument("--rate", type=float, default=10.0, help="updates a second to each browser (default 10)")
     ap.add_argument("--history-s", type=float, default=3600.0, help="live: data time kept for the charts (default 3600)")
+    ap.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_PORT, metavar="PORT",
+                    help=f"live: also serve kincald's channels to the Foxglove app on PORT (default {FOXGLOVE_PORT})")
     ap.add_argument("--lcm-types", help="folder holding the kincal LCM Python package")
     a = ap.parse_args(argv)
     try:
         if not (0 < a.port < 65536) or not (0 < a.rate <= 30):
             raise ViewError("--port must be 1..65535 and --rate in (0, 30]")
+        if a.foxglove is not None:
+            if a.log:
+                raise ViewError("--foxglove serves live LCM; open a recording in Foxglove as MCAP: "
+                                "kincal export --format mcap --log RUN.lcm --out RUN.mcap")
+            if not (0 < a.foxglove < 65536) or a.foxglove == a.port:
+                raise ViewError(f"--foxglove {a.foxglove}: a port 1..65535 other than the page's ({a.port})")
         if not use_lcm_types(a.lcm_types):
             raise ViewError("kincal's LCM Python types were not found (set KINCAL_LCM_TYPES)")
         truth = load_truth(a.truth)
@@ -524,7 +574,12 @@ def main(argv=None):
             print(f"kincal view: {a.log}: {n} messages, {timeline.snapshot()['span'][1]:.1f} s", flush=True)
         else:
             timeline = Timeline(a.history_s)
-            live = LiveSource(a.lcm_url, timeline)
+            foxglove = None
+            if a.foxglove is not None:
+                foxglove = FoxgloveLive(a.bind, a.foxglove)
+                fox_host = f"[{a.bind}]" if ":" in a.bind else a.bind
+                print(f"kincal view: Foxglove: ws://{fox_host}:{a.foxglove} (the app's Open connection)", flush=True)
+            live = LiveSource(a.lcm_url, timeline, foxglove)
             live.start()
         server = Server(a, timeline, a.log, truth)
         timeline.on_change = server.wake_all
