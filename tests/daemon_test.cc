@@ -308,6 +308,62 @@ TEST(DaemonOutputs, AnUnwritableCheckpointFolderFailsAtStart) {
       << refused3.status().message();
 }
 
+// The log of a run without its frames: controls and poses only, as `kincal import` writes
+// motion capture (with `zero_covariance`, as a PoseStamped has none).
+void StripFrames(const std::string& in_path, const std::string& out_path, bool zero_covariance) {
+  lcm::LogFile in(in_path, "r");
+  lcm::LogFile out(out_path, "w");
+  while (const lcm::LogEvent* ev = in.readNextEvent()) {
+    const std::string ch = ev->channel;
+    if (ch != "KINCAL_CONTROLS" && ch != "KINCAL_POSE") continue;
+    kincal::pose_t p;
+    std::vector<uint8_t> bytes(static_cast<const uint8_t*>(ev->data),
+                               static_cast<const uint8_t*>(ev->data) + ev->datalen);
+    if (ch == "KINCAL_POSE" && zero_covariance) {
+      ASSERT_GT(p.decode(bytes.data(), 0, static_cast<int>(bytes.size())), 0);
+      std::fill(std::begin(p.covariance), std::end(p.covariance), 0.0);
+      p.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    }
+    lcm::LogEvent copy = *ev;
+    copy.data = bytes.data();
+    out.writeEvent(&copy);
+  }
+}
+
+TEST(DaemonReplay, ALogWithoutFramesCalibratesFromItsPoses) {
+  DaemonConfig c = SimConfig5Hz(20);
+  c.record.path = TempPath("with_frames.lcm");
+  Checkpoint live;
+  {
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
+    ASSERT_EQ(d_owner->Run(), 0);
+    live = d_owner->Estimate();
+  }
+  for (const bool zero : {false, true}) {
+    SCOPED_TRACE(zero ? "poses without covariance" : "poses with the pose stage's covariance");
+    DaemonConfig r = c;
+    r.source = SourceKind::kReplay;
+    r.replay.path = TempPath(zero ? "mocap_zero.lcm" : "mocap.lcm");
+    r.replay.speed = 0;
+    r.record.path = TempPath("mocap_replayed.lcm");
+    StripFrames(c.record.path, r.replay.path, zero);
+    const std::unique_ptr<Daemon> d_owner = Daemon::Create(r).value();
+    ASSERT_EQ(d_owner->Run(), 0);
+    const Checkpoint e = d_owner->Estimate();
+    const DaemonCounters k = d_owner->counters();
+    EXPECT_EQ(k.frames_captured, 0);
+    EXPECT_GT(k.poses_valid, 300);
+    EXPECT_EQ(k.poses_published, k.poses_valid + k.poses_invalid);
+    ExpectWithin3Sigma(e, Truth(c));
+    if (!zero) {
+      // The poses and covariances the live filter had: the same calibration.
+      for (size_t i = 0; i < e.values.size(); ++i) {
+        EXPECT_NEAR(e.values[i], live.values[i], 1e-9 * std::abs(live.values[i])) << e.names[i];
+      }
+    }
+  }
+}
+
 TEST(DaemonReplay, MalformedEventsAreRejectedAndCounted) {
   // A log with a valid simulated run plus hostile events on the controls and frame
   // channels: undecodable bytes, the wrong model, NaN, a huge declared array, a frame

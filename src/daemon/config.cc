@@ -239,10 +239,15 @@ void LoadSim(Section s, DaemonConfig& c, const std::string& dir) {
   s.CheckUnknown();
 }
 
-void LoadReplay(Section s, DaemonConfig& c, const std::string& dir) {
+void LoadReplay(Section s, DaemonConfig& c, const std::string& dir, const std::string& path) {
   s.Path("path", &c.replay.path, dir);
   s.Get("speed", &c.replay.speed);
   s.Get("loops", &c.replay.loops);
+  std::vector<double> sigma(c.replay.pose_sigma.begin(), c.replay.pose_sigma.end());
+  s.Get("pose_sigma", &sigma);
+  if (sigma.size() != kPoseDim)
+    throw ConfigError(path + ": replay.pose_sigma needs 3 values (m, m, rad)");
+  c.replay.pose_sigma = {sigma[0], sigma[1], sigma[2]};
   s.CheckUnknown();
 }
 
@@ -380,7 +385,7 @@ void LoadSections(const YAML::Node& root, const std::string& path,
   LoadV4l2(top.Sub("v4l2"), c);
   LoadLibcamera(top.Sub("libcamera"), c);
   LoadSim(top.Sub("sim"), c, dir);
-  LoadReplay(top.Sub("replay"), c, dir);
+  LoadReplay(top.Sub("replay"), c, dir, path);
   LoadCamera(top.Sub("camera"), c, dir);
   LoadTarget(top.Sub("target"), c, dir);
   LoadDetector(top.Sub("detector"), c);

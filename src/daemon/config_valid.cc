@@ -1,5 +1,6 @@
 // kincald configuration: the checks of every options struct and of the whole config
 // (loading is in config.cc).
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -103,7 +104,10 @@ bool SimOptions::IsValid(std::string* error) const {
 bool ReplayOptions::IsValid(std::string* error) const {
   return Expect(!path.empty(), "replay.path (or --replay FILE) must name an LCM log", error) &&
          Expect(speed >= 0, "replay.speed must be >= 0 (0: --fast)", error) &&
-         Expect(loops >= 1, "replay.loops must be >= 1", error);
+         Expect(loops >= 1, "replay.loops must be >= 1", error) &&
+         Expect(std::all_of(pose_sigma.begin(), pose_sigma.end(),
+                            [](double v) { return std::isfinite(v) && v > 0; }),
+                "replay.pose_sigma must be 3 finite values > 0 (m, m, rad)", error);
 }
 
 bool CameraOptions::IsValid(std::string* error) const {

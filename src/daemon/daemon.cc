@@ -26,6 +26,7 @@
 #include "daemon/health.h"
 #include "daemon/path_lock.h"
 #include "daemon/pose_control_merge.h"
+#include "daemon/pose_input.h"
 #include "daemon/pose_stage.h"
 #include "daemon/publisher.h"
 #include "daemon/sources.h"
@@ -81,6 +82,7 @@ struct Daemon::Impl {
   FilterStage* stage = nullptr;
   CounterSet counters;
   ControlReceiver intake;
+  PoseReceiver logged_poses;  // a replayed log without frames: its poses
   std::unique_ptr<CaptureStage> capture;
   PoseStage pose_stage;
   std::unique_ptr<PreviewStage> preview;  // preview.enabled
@@ -113,13 +115,17 @@ struct Daemon::Impl {
             [this](const std::string& ch, const void* data, size_t n) {
               out.PublishRaw(ch, data, n);
             },
-            drive.get()))),
+            drive.get(),
+            [this](const void* data, size_t n, int64_t shift) {
+              logged_poses.OnMessage(data, n, shift);
+            }))),
         caps(source->capabilities()),
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
         control_q(static_cast<size_t>(cfg.queues.controls), QueuePolicy()),
         intake(sys.model(), cfg.robot.control_stamp, cfg.lcm.controls_channel, &out, &control_q,
                &counters),
+        logged_poses(cfg.lcm.pose_channel, cfg.replay.pose_sigma, &out, &pose_q, &counters),
         capture(std::make_unique<CaptureStage>(
             source.get(),
             CaptureOptions{cfg.lcm.frame_channel, cfg.lcm.publish_frames,

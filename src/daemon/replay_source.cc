@@ -1,5 +1,6 @@
 // Replay of a kincald LCM log: frames go through the pipeline again, controls to the
-// filter with their recorded receive times.
+// filter with their recorded receive times. A log without frames (motion capture imported
+// by `kincal import`) is replayed from its logged poses instead.
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -17,8 +18,9 @@ namespace {
 
 class ReplaySource final : public FrameSource {
  public:
-  ReplaySource(const ReplayOptions& replay, const LcmOptions& lcm, ControlIntake controls)
-      : opt_(replay), lcm_(lcm), intake_(std::move(controls)) {}
+  ReplaySource(const ReplayOptions& replay, const LcmOptions& lcm, ControlIntake controls,
+               PoseIntake poses)
+      : opt_(replay), lcm_(lcm), intake_(std::move(controls)), pose_intake_(std::move(poses)) {}
   ~ReplaySource() override {
     if (log_) ReportDamage();
   }
@@ -32,6 +34,10 @@ class ReplaySource final : public FrameSource {
         log_.reset();
         return Status::Error("replay: " + opt_.path +
                              ": the log is empty (0 bytes), nothing to replay");
+      }
+      if (Status s = ChooseMeasurements(); !s.ok()) {
+        log_.reset();
+        return s;
       }
     }
     start_mono_ = MonotonicNs();
@@ -66,6 +72,10 @@ class ReplaySource final : public FrameSource {
       const std::string_view channel(ev->channel);
       if (channel == lcm_.controls_channel) {
         intake_(ev->data.data(), ev->data.size(), ev->timestamp + offset_);
+        continue;
+      }
+      if (from_poses_ && channel == lcm_.pose_channel) {
+        pose_intake_(ev->data.data(), ev->data.size(), offset_);
         continue;
       }
       if (channel != lcm_.frame_channel) {
@@ -105,6 +115,33 @@ class ReplaySource final : public FrameSource {
   int64_t rejected() const override { return bad_frames_.load() + damaged_.load(); }
 
  private:
+  // Frames, or (a log with none) the logged poses: read from a reader of its own up to the
+  // first frame, so that the replay's damage counts start at zero.
+  Status ChooseMeasurements() {
+    std::unique_ptr<LcmLogReader> scan;
+    if (Status s = LcmLogReader::Open(opt_.path, &scan); !s.ok()) {
+      return Status::Error("replay: " + s.message());
+    }
+    int64_t poses = 0;
+    LcmLogEvent ev;
+    while (scan->Next(&ev)) {
+      if (ev.channel == lcm_.frame_channel) return {};
+      if (ev.channel == lcm_.pose_channel) ++poses;
+    }
+    if (poses == 0) {
+      return Status::Error("replay: " + opt_.path + ": no frames on " + lcm_.frame_channel +
+                           " and no poses on " + lcm_.pose_channel + ": nothing to replay");
+    }
+    if (!pose_intake_) {
+      return Status::Error("replay: " + opt_.path + ": a log without frames (" +
+                           std::to_string(poses) + " poses) needs kincald's pose intake");
+    }
+    from_poses_ = true;
+    spdlog::info("replay: {} has no frames: its {} poses on {} are the measurements", opt_.path,
+                 poses, lcm_.pose_channel);
+    return {};
+  }
+
   // Damage in the file (skipped bytes, a last event cut short) goes to the log once per
   // pass, never silently; the count is in rejected() and so in health.
   void ReportDamage() {
@@ -126,6 +163,8 @@ class ReplaySource final : public FrameSource {
   const ReplayOptions opt_;
   const LcmOptions lcm_;
   ControlIntake intake_;
+  PoseIntake pose_intake_;
+  bool from_poses_ = false;  // the log has no frames: its poses are the measurements
   std::unique_ptr<LcmLogReader> log_;
   LcmLogEvent ev_;
   size_t reported_ = 0;
@@ -141,8 +180,8 @@ class ReplaySource final : public FrameSource {
 }  // namespace
 
 std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
-                                              ControlIntake controls) {
-  return std::make_unique<ReplaySource>(replay, lcm, std::move(controls));
+                                              ControlIntake controls, PoseIntake poses) {
+  return std::make_unique<ReplaySource>(replay, lcm, std::move(controls), std::move(poses));
 }
 
 }  // namespace kincal::daemon

@@ -45,7 +45,7 @@ int64_t PipelineUtime(TimeNs mono_ns) {
 
 StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const VisionSetup& v,
                                                   ControlIntake controls, NetworkPublish publish,
-                                                  DriveLink* drive) {
+                                                  DriveLink* drive, PoseIntake poses) {
   switch (c.source) {
     case SourceKind::kSim:
       return MakeSimSource(
@@ -54,7 +54,7 @@ StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const V
            c.guidance.drive_pause_s},
           v, std::move(controls), std::move(publish), drive);
     case SourceKind::kReplay:
-      return MakeReplaySource(c.replay, c.lcm, std::move(controls));
+      return MakeReplaySource(c.replay, c.lcm, std::move(controls), std::move(poses));
     case SourceKind::kV4l2:
       return MakeV4l2Source(c.v4l2);
     case SourceKind::kLibcamera:

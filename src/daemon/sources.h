@@ -27,6 +27,9 @@ StatusOr<VisionSetup> LoadVisionSetup(const DaemonConfig& c);
 // Sources that also carry the robot's controls (simulation, replay) hand each message
 // over as the raw kincal.controls_t bytes with the host time it was received.
 using ControlIntake = std::function<void(const void* data, size_t n, int64_t receive_utime)>;
+// A log without frames hands each logged measurement over as the raw kincal.pose_t bytes;
+// `utime_shift` is to be added to its stamps (a looped replay's later passes).
+using PoseIntake = std::function<void(const void* data, size_t n, int64_t utime_shift)>;
 // Publishes raw bytes on the network only (the simulated robot's controls).
 using NetworkPublish = std::function<void(const std::string& channel, const void* data, size_t n)>;
 
@@ -50,9 +53,12 @@ StatusOr<std::unique_ptr<FrameSource>> MakeSimSource(const SimSourceOptions& o,
                                                      NetworkPublish publish,
                                                      DriveLink* drive = nullptr);
 // An LCM log written by `kincald --record`: frames on lcm.frame_channel, controls on
-// lcm.controls_channel (other channels are skipped and counted).
+// lcm.controls_channel (other channels are skipped and counted). A log with no frames
+// (motion capture from `kincal import`, a recording made without them) is replayed from
+// its poses on lcm.pose_channel instead, each handed to `poses` in log order with the
+// controls; Start() says which, and a log with neither is an error naming it.
 std::unique_ptr<FrameSource> MakeReplaySource(const ReplayOptions& replay, const LcmOptions& lcm,
-                                              ControlIntake controls);
+                                              ControlIntake controls, PoseIntake poses = nullptr);
 // Video4Linux2 capture device, mmap streaming.
 std::unique_ptr<FrameSource> MakeV4l2Source(const V4l2Options& o);
 // libcamera camera.
@@ -60,11 +66,13 @@ std::unique_ptr<FrameSource> MakeLibcameraSource(const LibcameraOptions& o);
 
 // The source the config names (source: sim | v4l2 | libcamera | replay). `controls` and
 // `publish` are used by the sources that carry the robot's controls (sim, replay), `drive`
-// by the simulated camera (guidance.drive; null: the scenario's controls). Devices and
-// files are opened by Start(); the simulated camera's scenario is read here.
+// by the simulated camera (guidance.drive; null: the scenario's controls), `poses` by the
+// replay of a log without frames. Devices and files are opened by Start(); the simulated
+// camera's scenario is read here.
 StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const VisionSetup& v,
                                                   ControlIntake controls, NetworkPublish publish,
-                                                  DriveLink* drive = nullptr);
+                                                  DriveLink* drive = nullptr,
+                                                  PoseIntake poses = nullptr);
 
 // The clocks (kincal/time.h):
 //   host realtime   CLOCK_REALTIME now, in us; it steps with NTP (health messages only);

@@ -2,7 +2,8 @@
 .db3 and .mcap): parameters recovered within 3 sigma of the simulated truth, hidden
 effects found, ros2_control parameters exported, and bad bags refused with a clear error.
 
-Run by ctest with the venv's Python: KINCAL_BIN names the kincal executable.
+Run by ctest with the venv's Python: KINCAL_BIN names the kincal executable, KINCALD_BIN
+kincald (which replays an imported log from its poses).
 """
 
 import json
@@ -17,6 +18,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import ros_bags  # noqa: E402
 
 KINCAL = os.environ.get("KINCAL_BIN", "kincal")
+KINCALD = os.environ.get("KINCALD_BIN", "kincald")
 
 
 def kincal(*args, ok=True):
@@ -188,11 +190,38 @@ class Car(Fixture):
         self.assertEqual(p["wheelbase"], 0.33)
         k_v = report["after"]["params"]["k_v"]
         self.assertAlmostEqual(p["traction_wheels_radius"], 0.05 * k_v["value"], delta=1e-9)
+        self.check_kincald_agrees(log, report, truth)
         # A folder of bags is the same import.
         log2 = self.path("car2.lcm")
         kincal("import", folder, "--out", log2, "--model", "bicycle", "--controls", "/drive", "--poses", "/mocap/car/pose")
         with open(log, "rb") as a, open(log2, "rb") as b:
             self.assertEqual(a.read(), b.read())
+
+    def check_kincald_agrees(self, log, report, truth):
+        """kincald replays the imported log (no frames: its poses are the measurements) with
+        the wheelbase held and effects found as it runs: the truth within 3 sigma, the
+        steering lag found, and the calibration analyze's within their sigmas."""
+        config, checkpoint = self.path("car_kincald.yaml"), self.path("car_checkpoint.json")
+        with open(config, "w") as f:
+            f.write("robot:\n  model: bicycle\n  effects: auto\n"
+                    "  guess: {k_v: 1.0, k_steer: 1.0, steer_offset: 0.0, wheelbase: 0.33}\n"
+                    "  fixed: {wheelbase: 0.33}\nlcm:\n  url: memq://\n")
+        r = subprocess.run([KINCALD, "-c", config, "--replay", log, "--speed", "0", "--checkpoint", checkpoint],
+                           capture_output=True, text=True, timeout=600)
+        self.assertEqual(r.returncode, 0, r.stderr)
+        self.assertIn("has no frames: its", r.stderr + r.stdout)
+        with open(checkpoint) as f:
+            c = json.load(f)
+        self.assertEqual(c["source"], "batch")
+        self.assertTrue(any(e.startswith("actuator_lag") for e in c["effects"]), c["effects"])
+        sigma = {n: math.sqrt(c["covariance"][i][i]) for i, n in enumerate(c["names"])}
+        value = dict(zip(c["names"], c["values"]))
+        for n in ("k_v", "k_steer", "steer_offset"):
+            self.assertLess(abs(value[n] - truth[n]), 3 * sigma[n], f"kincald {n}: {value[n]} +- {sigma[n]}")
+            a = report["after"]["params"][n]
+            self.assertLess(abs(value[n] - a["value"]), 3 * max(sigma[n], a["sigma"]),
+                            f"{n}: kincald {value[n]} +- {sigma[n]}, analyze {a['value']} +- {a['sigma']}")
+        self.assertEqual(value["wheelbase"], 0.33)
 
     def test_bags_of_different_robots_are_refused_and_nothing_written(self):
         folder = self.path("bags")

@@ -106,6 +106,11 @@ struct ReplayOptions {
   std::string path;
   double speed = 1.0;  // 0: --fast (as fast as possible, nothing dropped, deterministic)
   int loops = 1;       // play the log this many times, each later by the log's span (soak tests)
+  // A log without frames (motion capture imported by `kincal import`, or a recording made
+  // without them) is replayed from its poses. A logged pose whose covariance is not
+  // positive definite (PoseStamped has none: imported as zeros) is given this one-sigma
+  // noise (m, m, rad) instead.
+  std::array<double, 3> pose_sigma{0.002, 0.002, 0.01};
   bool IsValid(std::string* error) const;
 };
 
