@@ -88,7 +88,7 @@ void WriteMocapLog(const std::string& path, int poses, bool with_controls = true
   for (int k = 0; k < poses; ++k) {
     const int64_t t = 1'000'000 + 100'000 * k;
     if (with_controls) {
-      kincal::controls_t u;
+      kincal::controls_t u{};
       u.schema_version = 1;
       u.utime = t - 50'000;
       u.model = "unicycle";
@@ -169,9 +169,10 @@ TEST(ReplaySource, ALogWithNeitherFramesNorPosesIsNamed) {
   const std::string path = TempPath("controls_only.lcm");
   {
     lcm::LogFile out(path, "w");
-    kincal::controls_t u;
+    kincal::controls_t u{};
     u.schema_version = 1;
     u.model = "unicycle";
+    u.num_controls = 0;
     std::vector<uint8_t> bytes(static_cast<size_t>(u.getEncodedSize()));
     u.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
     lcm::LogEvent ev{};
