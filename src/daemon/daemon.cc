@@ -6,6 +6,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <functional>
 #include <kincal/calibration_t.hpp>
 #include <kincal/health_t.hpp>
 #include <kincal/model_check_t.hpp>
@@ -109,16 +110,10 @@ struct Daemon::Impl {
         sys(OrStartupError(MakeSystem(cfg.robot.model, cfg.robot.effects))),
         vis(OrStartupError(LoadVisionSetup(cfg))),
         drive(MakeDriveLink(cfg, vis)),
-        source(OrStartupError(MakeSource(
-            cfg, vis,
-            [this](const void* data, size_t n, int64_t utime) { intake.OnMessage(data, n, utime); },
-            [this](const std::string& ch, const void* data, size_t n) {
-              out.PublishRaw(ch, data, n);
-            },
-            drive.get(),
-            [this](const void* data, size_t n, int64_t shift) {
-              logged_poses.OnMessage(data, n, shift);
-            }))),
+        source(OrStartupError(
+            MakeSource(cfg, vis, std::bind_front(&ControlReceiver::OnMessage, &intake),
+                       std::bind_front(&Publisher::PublishRaw, &out), drive.get(),
+                       std::bind_front(&PoseReceiver::OnMessage, &logged_poses)))),
         caps(source->capabilities()),
         frame_q(static_cast<size_t>(cfg.queues.frames), QueuePolicy()),
         pose_q(static_cast<size_t>(cfg.queues.poses), QueuePolicy()),
@@ -204,12 +199,11 @@ struct Daemon::Impl {
   }
 
   void FilterLoop() {
-    FilterPrior prior = DaemonPrior(sys, cfg, resume);
     FilterStageOptions options = FilterStageOptionsFrom(cfg);
     options.lossless = caps.lossless;
     options.resumed = resume;
     FilterStage stage(
-        sys, std::move(options), std::move(prior),
+        sys, std::move(options), DaemonPrior(sys, cfg, resume),
         [this](ControlSample* c) { return control_q.TryPop(*c); }, StageOutputs(), &counters,
         std::make_unique<BatchWorker>(/*background=*/!caps.lossless));
     MergeInputs in;
