@@ -5,15 +5,12 @@
 #include <kincal/controls_t.hpp>
 
 #include "kincal/system.h"
+#include "lcm_round_trip.h"
 
 namespace kincal::daemon {
 namespace {
 
-std::vector<uint8_t> Encode(const kincal::controls_t& m) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  return buf;
-}
+using ::kincal::testing::Encoded;
 
 kincal::controls_t DiffDrive(double left, double right) {
   kincal::controls_t m;
@@ -38,7 +35,7 @@ TEST(ControlReceiver, QueuesAValidMessageInTheModelsChannelOrder) {
   Fixture f;
   ControlReceiver r(f.sys.model(), ControlStamp::kReceive, "C", &f.publisher, &f.queue,
                     &f.counters);
-  const auto buf = Encode(DiffDrive(1.5, -2.5));
+  const auto buf = Encoded(DiffDrive(1.5, -2.5));
   r.OnMessage(buf.data(), buf.size(), 777);
   ControlSample s;
   ASSERT_TRUE(f.queue.TryPop(s));
@@ -52,7 +49,7 @@ TEST(ControlReceiver, QueuesAValidMessageInTheModelsChannelOrder) {
 TEST(ControlReceiver, UsesTheSendersStampWhenConfigured) {
   Fixture f;
   ControlReceiver r(f.sys.model(), ControlStamp::kSender, "C", &f.publisher, &f.queue, &f.counters);
-  const auto buf = Encode(DiffDrive(1, 1));
+  const auto buf = Encoded(DiffDrive(1, 1));
   r.OnMessage(buf.data(), buf.size(), 777);
   ControlSample s;
   ASSERT_TRUE(f.queue.TryPop(s));
@@ -66,10 +63,10 @@ TEST(ControlReceiver, MapsTheSendersClockOntoTheReceiveClockAndReportsTheJitter)
   // Sender clock 1234 us; received 10 ms late, then 2 ms late 20 ms of sender time later:
   // the second fixes the floor, 8 ms of jitter measured in the first.
   kincal::controls_t m = DiffDrive(1, 1);
-  auto buf = Encode(m);
+  auto buf = Encoded(m);
   r.OnMessage(buf.data(), buf.size(), 1'000'000 + 10'000);
   m.sender_utime = 1234 + 20'000;
-  buf = Encode(m);
+  buf = Encoded(m);
   r.OnMessage(buf.data(), buf.size(), 1'000'000 + 22'000);
   ControlSample a, b;
   ASSERT_TRUE(f.queue.TryPop(a));
@@ -79,7 +76,7 @@ TEST(ControlReceiver, MapsTheSendersClockOntoTheReceiveClockAndReportsTheJitter)
   EXPECT_NEAR(r.timing().jitter_max_ms, 0.0, 1e-9) << "each was the floor when it came";
   // A message without a sender stamp keeps its receive stamp, and is counted.
   m.sender_utime = 0;
-  buf = Encode(m);
+  buf = Encoded(m);
   r.OnMessage(buf.data(), buf.size(), 1'050'000);
   ControlSample c;
   ASSERT_TRUE(f.queue.TryPop(c));
@@ -93,18 +90,18 @@ TEST(ControlReceiver, RejectsAndNamesWhatIsWrong) {
                     &f.counters);
   kincal::controls_t wrong_model = DiffDrive(1, 1);
   wrong_model.model = "unicycle";
-  auto buf = Encode(wrong_model);
+  auto buf = Encoded(wrong_model);
   r.OnMessage(buf.data(), buf.size(), 1);
   EXPECT_NE(r.last_reject().find("controls for model 'unicycle', expected 'diffdrive'"),
             std::string::npos)
       << r.last_reject();
   kincal::controls_t not_finite = DiffDrive(std::nan(""), 1);
-  buf = Encode(not_finite);
+  buf = Encoded(not_finite);
   r.OnMessage(buf.data(), buf.size(), 2);
   const uint8_t garbage[7] = {1, 2, 3, 4, 5, 6, 7};
   r.OnMessage(garbage, sizeof garbage, 3);
   // Finite but no wheel turns at 10^5 rad/s: a unit mistake or garbage (issue 16).
-  buf = Encode(DiffDrive(1e5, 1));
+  buf = Encoded(DiffDrive(1e5, 1));
   r.OnMessage(buf.data(), buf.size(), 4);
   EXPECT_NE(r.last_reject().find("control 'omega_l' = 100000.000000: expected a finite value "
                                  "within +-10000.000000 rad/s"),

@@ -9,14 +9,12 @@
 #include <limits>
 #include <vector>
 
+#include "lcm_round_trip.h"
+
 namespace kincal::daemon {
 namespace {
 
-std::vector<uint8_t> Encode(const kincal::pose_t& m) {
-  std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
-  m.encode(buf.data(), 0, static_cast<int>(buf.size()));
-  return buf;
-}
+using ::kincal::testing::Encoded;
 
 kincal::pose_t Mocap(double x, double y, double theta) {
   kincal::pose_t m{};
@@ -40,7 +38,7 @@ struct Fixture {
 
 TEST(PoseReceiver, QueuesALoggedPoseShiftedWithTheConfiguredNoiseWhereItHasNone) {
   Fixture f;
-  const auto buf = Encode(Mocap(1.25, -0.5, 0.3));
+  const auto buf = Encoded(Mocap(1.25, -0.5, 0.3));
   f.receiver.OnMessage(buf.data(), buf.size(), 40'000'000);
   PoseSample p;
   ASSERT_TRUE(f.queue.TryPop(p));
@@ -65,14 +63,14 @@ TEST(PoseReceiver, KeepsALoggedCovarianceThatIsOne) {
   m.source_utime = 77;
   PoseSample p;
   std::string why;
-  const auto buf = Encode(m);
+  const auto buf = Encoded(m);
   ASSERT_TRUE(DecodeLoggedPose(buf.data(), buf.size(), 5, kSigma, &p, &why)) << why;
   EXPECT_DOUBLE_EQ(p.covariance(0, 1), 1e-6);
   EXPECT_DOUBLE_EQ(p.covariance(1, 1), 9e-6);
   EXPECT_EQ(p.device_utime, 82);
   // Not symmetric, or not positive definite: the configured noise instead.
   m.covariance[1] = 2e-6;
-  const auto asym = Encode(m);
+  const auto asym = Encoded(m);
   ASSERT_TRUE(DecodeLoggedPose(asym.data(), asym.size(), 0, kSigma, &p, &why));
   EXPECT_DOUBLE_EQ(p.covariance(0, 1), 0.0);
   EXPECT_DOUBLE_EQ(p.covariance(0, 0), 0.002 * 0.002);
@@ -82,7 +80,7 @@ TEST(PoseReceiver, AnInvalidPoseIsQueuedAsOneWithoutTheTarget) {
   Fixture f;
   kincal::pose_t m = Mocap(0, 0, 0);
   m.valid = 0;
-  const auto buf = Encode(m);
+  const auto buf = Encoded(m);
   f.receiver.OnMessage(buf.data(), buf.size(), 0);
   PoseSample p;
   ASSERT_TRUE(f.queue.TryPop(p));
@@ -92,7 +90,7 @@ TEST(PoseReceiver, AnInvalidPoseIsQueuedAsOneWithoutTheTarget) {
 
 TEST(PoseReceiver, RejectsAndNamesWhatIsNotAPose) {
   Fixture f;
-  const auto buf = Encode(Mocap(std::numeric_limits<double>::quiet_NaN(), 0, 0));
+  const auto buf = Encoded(Mocap(std::numeric_limits<double>::quiet_NaN(), 0, 0));
   f.receiver.OnMessage(buf.data(), buf.size(), 0);
   EXPECT_NE(f.receiver.last_reject().find("not finite"), std::string::npos)
       << f.receiver.last_reject();

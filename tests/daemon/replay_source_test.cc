@@ -12,11 +12,13 @@
 
 #include "daemon/daemon_test_util.h"
 #include "daemon/sources.h"
+#include "io/io_test_util.h"
 #include "source_dir.h"
 
 namespace kincal::daemon {
 namespace {
 
+using ::kincal::testing::PutMessage;
 using test_util::Counted;
 using test_util::Drain;
 using test_util::SimConfig;
@@ -24,12 +26,18 @@ using test_util::TempPath;
 
 const std::string kGoldenLog = ::kincal::testing::SourceDir() + "/tests/data/golden_replay.lcm";
 
-TEST(ReplaySource, ReplayOfALogIsLosslessAndCarriesItsControls) {
+// The golden log's config, replayed as fast as possible.
+DaemonConfig GoldenReplay() {
   DaemonConfig c =
       ReadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml").value();
   c.source = SourceKind::kReplay;
   c.replay.path = kGoldenLog;
   c.replay.speed = 0;
+  return c;
+}
+
+TEST(ReplaySource, ReplayOfALogIsLosslessAndCarriesItsControls) {
+  const DaemonConfig c = GoldenReplay();
   Counted n;
   auto src = MakeSource(
                  c, LoadVisionSetup(c).value(),
@@ -75,16 +83,6 @@ TEST(ReplaySource, ReplayOfAMissingLogNamesIt) {
 // A motion-capture log as `kincal import` writes one: controls and poses, no frames.
 void WriteMocapLog(const std::string& path, int poses, bool with_controls = true) {
   lcm::LogFile out(path, "w");
-  auto write = [&](const std::string& ch, int64_t t, const auto& msg) {
-    std::vector<uint8_t> bytes(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    lcm::LogEvent ev{};
-    ev.timestamp = t;
-    ev.channel = ch;
-    ev.datalen = static_cast<int32_t>(bytes.size());
-    ev.data = bytes.data();
-    out.writeEvent(&ev);
-  };
   for (int k = 0; k < poses; ++k) {
     const int64_t t = 1'000'000 + 100'000 * k;
     if (with_controls) {
@@ -95,15 +93,15 @@ void WriteMocapLog(const std::string& path, int poses, bool with_controls = true
       u.num_controls = 2;
       u.names = {"v", "omega"};
       u.values = {0.2, 0.1};
-      write("KINCAL_CONTROLS", t - 50'000, u);
+      PutMessage(out, "KINCAL_CONTROLS", u, t - 50'000);
     }
     kincal::pose_t p{};
     p.schema_version = 1;
     p.utime = t;
     p.x = 0.02 * k;
     p.valid = 1;
-    write("KINCAL_POSE", t, p);
-    write("KINCAL_HEALTH_OF_SOMETHING_ELSE", t, p);  // another channel: skipped
+    PutMessage(out, "KINCAL_POSE", p, t);
+    PutMessage(out, "KINCAL_HEALTH_OF_SOMETHING_ELSE", p, t);  // another channel: skipped
   }
 }
 
@@ -148,11 +146,7 @@ TEST(ReplaySource, ALogWithoutFramesHandsOverItsPosesInOrderWithTheControls) {
 }
 
 TEST(ReplaySource, ALogWithFramesReplaysTheFramesAndNotTheLoggedPoses) {
-  DaemonConfig c =
-      ReadDaemonConfig(::kincal::testing::SourceDir() + "/tests/data/kincald_golden.yaml").value();
-  c.source = SourceKind::kReplay;
-  c.replay.path = kGoldenLog;
-  c.replay.speed = 0;
+  const DaemonConfig c = GoldenReplay();
   int poses = 0;
   auto src = MakeSource(
                  c, LoadVisionSetup(c).value(), [](const void*, size_t, int64_t) {}, nullptr,
@@ -173,13 +167,7 @@ TEST(ReplaySource, ALogWithNeitherFramesNorPosesIsNamed) {
     u.schema_version = 1;
     u.model = "unicycle";
     u.num_controls = 0;
-    std::vector<uint8_t> bytes(static_cast<size_t>(u.getEncodedSize()));
-    u.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    lcm::LogEvent ev{};
-    ev.channel = "KINCAL_CONTROLS";
-    ev.datalen = static_cast<int32_t>(bytes.size());
-    ev.data = bytes.data();
-    out.writeEvent(&ev);
+    PutMessage(out, "KINCAL_CONTROLS", u, 0);
   }
   Heard heard;
   const Status s = MocapSource(path, 1, &heard)->Start();

@@ -14,14 +14,14 @@
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
 #include "kincal/model.h"
+#include "lcm_round_trip.h"
 
 namespace kincal::testing {
 
 // Appends one encoded LCM message to a log written with liblcm's own writer.
 template <typename Msg>
 void PutMessage(lcm::LogFile& log, const std::string& channel, const Msg& msg, int64_t utime) {
-  std::vector<uint8_t> buf(static_cast<size_t>(msg.getEncodedSize()));
-  msg.encode(buf.data(), 0, static_cast<int>(buf.size()));
+  std::vector<uint8_t> buf = Encoded(msg);
   lcm::LogEvent ev{};
   ev.timestamp = utime;
   ev.channel = channel;
