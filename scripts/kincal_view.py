@@ -197,7 +197,8 @@ class Timeline:
     def _on_guidance_t(self, m, utime, _):
         self._keep("guidance", utime, {"parameter": m.parameter, "sigma": m.sigma, "target": m.target,
                                        "motion": m.motion, "duration_s": m.duration_s,
-                                       "time_to_target_s": m.time_to_target_s})
+                                       "time_to_target_s": m.time_to_target_s, "utime": utime,
+                                       "path": list(zip(getattr(m, "path_x", []), getattr(m, "path_y", [])))})
 
     def _on_calibration_t(self, m, utime, _):
         self._keep("calibration", utime, {s: getattr(m, s) for s in ("sequence", "ok", "error")
@@ -217,6 +218,18 @@ class Timeline:
         i = bisect.bisect_right([u for u, _ in q], t)
         return q[i - 1][1] if i > 0 else None
 
+    def _advised_path(self, guidance):
+        """The guidance's path on the floor: from the target's pose at the estimate it
+        advised on (its path is in that pose's frame); None without one."""
+        if not guidance or not guidance.get("path") or not self.poses:
+            return None
+        i = bisect.bisect_right([u for u, _ in self.poses], guidance["utime"])
+        if i == 0:
+            return None
+        x0, y0, th = self.poses[i - 1][1]
+        c, s = math.cos(th), math.sin(th)
+        return [[x0 + c * x - s * y, y0 + s * x + c * y] for x, y in guidance["path"]]
+
     def snapshot(self, t=None, max_points=600):
         with self.lock:
             preview = self._at(self.previews, t)
@@ -234,14 +247,16 @@ class Timeline:
             history = params[::step]
             if params and (not history or history[-1][0] != params[-1][0]):
                 history.append(params[-1])
+            guidance = self._at(self.latest.get("guidance"), t)
             return {
                 "preview": preview, "markers": markers, "track": track,
-                "floor": {"seen": self.floor_seen, "track": floor_track, "pose": poses[-1] if poses else None},
+                "floor": {"seen": self.floor_seen, "track": floor_track, "pose": poses[-1] if poses else None,
+                          "path": self._advised_path(guidance)},
                 "params": [{"t": (u - (self.first_utime or u)) * 1e-6, **p} for u, p in history],
                 "latest_params": params[-1][1] if params else None,
                 "model_check": self._at(self.latest.get("model_check"), t),
                 "health": self._at(self.latest.get("health"), t),
-                "guidance": self._at(self.latest.get("guidance"), t),
+                "guidance": guidance,
                 "calibration": self._at(self.latest.get("calibration"), t),
                 "errors": {ch: {"what": w, "count": n} for ch, (w, n) in self.errors.items()},
                 "channels": dict(self.channels),

@@ -1,14 +1,16 @@
 """kincal view in a real browser (issue 35): Debian's chromium, driven by selenium.
 
-live:  kincald on the simulated camera (--preview, paced, on an LCM URL of this test's
-       own) and `kincal view` on it. After the first update the page must draw every
-       published marker of the picture it shows where preview_t's mapping puts it (in the
-       page's own record and in the canvas's pixels; in a screenshot too, on the paused
-       recording below), the floor the camera sees with the track and pose, one chart per
+live:  kincald on the simulated camera with guidance (--preview, paced, on an LCM URL of
+       this test's own) and `kincal view` on it. After the first update the page must draw
+       every published marker of the picture it shows where preview_t's mapping puts it (in
+       the page's own record and in the canvas's pixels; in a screenshot too, on the paused
+       recording below), the floor the camera sees with the track, the pose and the
+       guidance's advised path (as the last KINCAL_GUIDANCE has it), one chart per
        parameter named after
        it, >= 5 updates a second, frames on the page <= 250 ms after their capture, a
        second browser served at the same time, and once kincald has ended the health the
-       last KINCAL_HEALTH says and "daemon not heard for N s" over the picture.
+       last KINCAL_HEALTH says (the preview's counts too) and "daemon not heard for N s"
+       over the picture.
 log:   `kincal view --log` on the recording kincald made: play, pause and the slider move
        the picture and the charts through the run.
 errors: garbage on a kincal channel is named on the page; a port in use and a file that
@@ -20,6 +22,7 @@ errors: garbage on a kincal channel is named on the page; a port in use and a fi
 and the latency are printed, not judged.
 """
 import json
+import math
 import os
 import shutil
 import socket
@@ -72,16 +75,18 @@ def start_view(kincal, args, port):
 
 
 class Health(threading.Thread):
-    """The last KINCAL_HEALTH, heard beside the page."""
+    """The last KINCAL_HEALTH and KINCAL_GUIDANCE, heard beside the page."""
 
     def __init__(self, url):
         super().__init__(daemon=True)
         import lcm
         from kincal_lcm_types import use_lcm_types
         use_lcm_types()
-        from kincal import health_t
+        from kincal import guidance_t, health_t
         self.lcm, self.type, self.last, self.stop = lcm.LCM(url), health_t, None, False
+        self.guidance = None
         self.lcm.subscribe("KINCAL_HEALTH", lambda ch, data: setattr(self, "last", self.type.decode(data)))
+        self.lcm.subscribe("KINCAL_GUIDANCE", lambda ch, data: setattr(self, "guidance", guidance_t.decode(data)))
 
     def run(self):
         while not self.stop:
@@ -170,13 +175,34 @@ def check_screenshot(driver, want, failures, path):
         failures.append(f"screenshot: {hits} of {len(want)} markers' rings seen")
 
 
+def check_advised_path(driver, health, failures):
+    """The guidance's path on the floor map: as many points as the last KINCAL_GUIDANCE
+    carries, as far from its start to its end (the message's path is in the target's frame,
+    the page's on the floor: a rotation and a shift keep that distance)."""
+    wait_for(driver, "const f = window.kincalView.floorDrawn; return f && f.path && f.path.length > 1", 20,
+             "the guidance's path on the floor map")
+    for _ in range(20):  # a newer advice may land between reading the page and the message
+        path = driver.execute_script("return window.kincalView.floorDrawn.path")
+        g = health.guidance
+        if g is not None and len(path) == g.num_path:
+            drawn = math.dist(path[0], path[-1])
+            sent = math.hypot(g.path_x[-1], g.path_y[-1])
+            if abs(drawn - sent) < 1e-9 + 1e-9 * sent:
+                return
+        time.sleep(0.1)
+    failures.append(f"the advised path on the page {path[:2]}...{path[-1:]} ({len(path)} points) does not "
+                    f"match the last KINCAL_GUIDANCE ({g.num_path if g else None} points)")
+
+
 def live(kincald, kincal, work, failures, timing=True):
     url = f"udpm://239.255.76.67:{free_port()}?ttl=0"
     port = free_port()
     log = os.path.join(work, "live.lcm")
     health = Health(url)
     health.start()
-    daemon = subprocess.Popen([kincald, "--duration", "25", "--preview", "--lcm-url", url, "--record", log, "-q"],
+    config = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "config", "kincald_sim_guidance.yaml")
+    daemon = subprocess.Popen([kincald, "-c", config, "--duration", "25", "--preview", "--lcm-url", url,
+                               "--record", log, "-q"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     view = start_view(kincal, ["--lcm-url", url], port)
     driver = browser()
@@ -217,6 +243,7 @@ def live(kincald, kincal, work, failures, timing=True):
         floor = driver.execute_script("return window.kincalView.floorDrawn")
         if not floor or floor["seen"] != 32 or floor["track"] < 10 or not floor["pose"]:
             failures.append(f"floor map drawn: {floor} (want the 32-point polygon, a track and a pose)")
+        check_advised_path(driver, health, failures)
         n_params = len(driver.execute_script("return window.kincalView.lastState().latest_params.names"))
         names = driver.execute_script(
             "return Array.from(document.querySelectorAll('#charts .chart')).map(d => [d.dataset.param, d.data[0].name])")
@@ -239,6 +266,12 @@ def live(kincald, kincal, work, failures, timing=True):
         if h is None or not shown.startswith(f"{h.frames_captured} "):
             failures.append(f"health on the page {shown!r}, last KINCAL_HEALTH frames_captured "
                             f"{h.frames_captured if h else None}")
+        preview = driver.execute_script(
+            "return document.querySelector('[data-key=\"preview\"]').textContent")
+        if h is None or h.preview_published <= 0 or not preview.startswith(
+                f"{h.preview_published} published, {h.preview_skipped} skipped"):
+            failures.append(f"preview on the page {preview!r}, last KINCAL_HEALTH "
+                            f"{(h.preview_published, h.preview_skipped) if h else None}")
         driver.save_screenshot(os.path.join(work, "view_live.png"))
     finally:
         health.stop = True

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <kincal/controls_t.hpp>
+#include <kincal/health_t.hpp>
 #include <kincal/markers_t.hpp>
 #include <kincal/params_t.hpp>
 #include <kincal/pose_t.hpp>
@@ -209,17 +210,22 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
   DaemonConfig c = SimConfig5Hz(6);
   c.preview.enabled = true;
   c.record.path = TempPath("preview.lcm");
+  DaemonCounters counted;
   {
     const std::unique_ptr<Daemon> d_owner = Daemon::Create(c).value();
     Daemon& d = *d_owner;
     ASSERT_EQ(d.Run(), 0);
+    counted = d.counters();
   }
   lcm::LogFile log(c.record.path, "r");
   std::vector<kincal::preview_t> previews;
   std::set<int64_t> marker_frames;
   std::map<int64_t, kincal::markers_t> markers;
+  kincal::health_t last_health{};
   while (const lcm::LogEvent* ev = log.readNextEvent()) {
-    if (ev->channel == c.lcm.preview_channel) {
+    if (ev->channel == c.lcm.health_channel) {
+      ASSERT_EQ(last_health.decode(ev->data, 0, ev->datalen), ev->datalen);
+    } else if (ev->channel == c.lcm.preview_channel) {
       kincal::preview_t m;
       ASSERT_EQ(m.decode(ev->data, 0, ev->datalen), ev->datalen);
       previews.push_back(m);
@@ -232,6 +238,12 @@ TEST(DaemonSim, PublishesAndRecordsThePreview) {
   }
   // 6 s at 5 Hz (the simulated camera's 30 Hz stamps: every sixth frame).
   EXPECT_NEAR(static_cast<double>(previews.size()), 30.0, 1.0);
+  // Counted in health (issue 35): every preview published, none skipped (lossless: the
+  // preview waits for its worker), the last health_t after the last preview.
+  EXPECT_EQ(counted.preview_published, static_cast<int64_t>(previews.size()));
+  EXPECT_EQ(counted.preview_skipped, 0);
+  EXPECT_EQ(last_health.preview_published, static_cast<int64_t>(previews.size()));
+  EXPECT_EQ(last_health.preview_skipped, 0);
   for (const auto& p : previews) {
     EXPECT_EQ(p.scale, 2);  // the default 640x480 camera, preview.width 320
     EXPECT_EQ(p.width, 320);

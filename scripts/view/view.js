@@ -188,7 +188,7 @@ function renderFloor(f) {
   const g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
   if (!f) return;
-  const pts = (f.seen || []).concat((f.track || []).map((p) => [p[0], p[1]]));
+  const pts = (f.seen || []).concat((f.track || []).map((p) => [p[0], p[1]]), f.path || []);
   if (!pts.length) {
     g.fillStyle = "#888";
     g.fillText("no floor polygon or pose yet", 10, 20);
@@ -210,6 +210,11 @@ function renderFloor(f) {
   g.lineWidth = 1.5;
   if (f.seen && f.seen.length >= 3) line(f.seen, "#7fa7c9", true);
   if (f.track && f.track.length > 1) line(f.track, "#ffcc00", false);
+  if (f.path && f.path.length > 1) {  // the guidance's advised motion, from where it was advised
+    g.setLineDash([6, 4]);
+    line(f.path, "#d070ff", false);
+    g.setLineDash([]);
+  }
   if (f.pose) {
     const [x, y, th] = f.pose;
     const a = 0.15 * span;
@@ -218,7 +223,8 @@ function renderFloor(f) {
   }
   g.fillStyle = "#888";
   g.fillText(`${fmt(span, 2)} m across`, 6, c.height - 6);
-  window.kincalView.floorDrawn = { seen: (f.seen || []).length, track: (f.track || []).length, pose: f.pose };
+  window.kincalView.floorDrawn = {
+    seen: (f.seen || []).length, track: (f.track || []).length, pose: f.pose, path: f.path || null };
 }
 
 function renderEstimate(s) {
@@ -265,6 +271,7 @@ function renderHealth(h) {
     ["resets", `${h.filter_resets} filter, ${h.run_resets} runs, ${h.time_resets} time, ${h.source_restarts} source`],
     ["controls", `${h.controls_received} (${h.messages_rejected} rejected, ${h.controls_dropped_queue} dropped)`],
     ["batches", `${h.batch_runs} (${h.batch_failed} failed), ${h.filter_recentres} re-centres`],
+    ["preview", `${h.preview_published} published, ${h.preview_skipped} skipped (worker busy)`],
     ["health", h.ok ? "ok" : `not ok: ${escapeHtml(h.message)}`],
   ];
   table.innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td data-key="${k}">${v}</td></tr>`).join("");

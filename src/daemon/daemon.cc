@@ -304,6 +304,8 @@ struct Daemon::Impl {
     c.guidance_skipped_busy = guidance ? guidance->skipped_busy() : 0;
     c.drive_legs = drive ? drive->legs() : 0;
     c.drive_legs_failed = drive ? drive->legs_failed() : 0;
+    c.preview_published = preview ? preview->published() : 0;
+    c.preview_skipped = preview ? preview->skipped() : 0;
     return c;
   }
 };
@@ -411,11 +413,7 @@ int Daemon::Run() {
   filter.join();
   lcm_thread.join();
   if (d.guidance) d.guidance->Drain();  // the last advice into the log
-  if (d.preview) {
-    d.preview->Drain();  // the last preview into the log
-    spdlog::info("kincald: preview: {} published, {} skipped (the preview worker was busy)",
-                 d.preview->published(), d.preview->skipped());
-  }
+  if (d.preview) d.preview->Drain();    // the last preview into the log
   d.source->Stop();
   d.PublishHealth(period.count());
   d.out.CloseLog();

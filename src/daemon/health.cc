@@ -83,7 +83,7 @@ std::string SummaryLine(const DaemonCounters& c) {
       "{} valid poses ({} dropped by the queue), {} updates, {} gated, {} runs, {} filter "
       "resets, {} time resets, {} source restarts; {} controls ({} rejected, {} out of order, "
       "{} late, {} dropped by the queue); log {} written / {} lost; latency p50 {:.3f} ms p99 "
-      "{:.3f} ms{}",
+      "{:.3f} ms{}{}",
       c.frames_captured, c.frames_dropped_device, c.frames_dropped_queue, c.frames_bad,
       c.frames_out_of_order, c.poses_valid, c.poses_dropped_queue, c.updates, c.poses_gated,
       c.run_resets + (c.updates > 0 ? 1 : 0), c.filter_resets, c.time_resets, c.source_restarts,
@@ -93,13 +93,17 @@ std::string SummaryLine(const DaemonCounters& c) {
       c.control_jitter_p95_ms < 0
           ? std::string()
           : fmt::format("; control receive jitter p95 {:.1f} ms max {:.1f} ms, {} clock steps",
-                        c.control_jitter_p95_ms, c.control_jitter_max_ms, c.control_clock_steps));
+                        c.control_jitter_p95_ms, c.control_jitter_max_ms, c.control_clock_steps),
+      c.preview_published + c.preview_skipped == 0
+          ? std::string()
+          : fmt::format("; preview {} published, {} skipped (the preview worker was busy)",
+                        c.preview_published, c.preview_skipped));
 }
 
 void HealthReporter::Build(const DaemonCounters& now, const HealthStatus& s, double period_s,
                            int64_t utime, kincal::health_t* h) {
   *h = kincal::health_t{};
-  h->schema_version = 7;
+  h->schema_version = 8;
   h->utime = utime;
   h->source = s.source_name;
   h->frame_rate_hz = static_cast<double>(now.frames_captured - prev_.frames_captured) / period_s;

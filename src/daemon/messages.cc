@@ -84,7 +84,7 @@ void FillHealthCounters(const DaemonCounters& c, kincal::health_t* m) {
 
 void FillGuidanceMessage(const System& sys, const std::string& model, const Advice& a,
                          const PlanOptions& o, int64_t utime, kincal::guidance_t* m) {
-  m->schema_version = 1;
+  m->schema_version = 2;
   m->utime = utime;
   m->model = model;
   const int n = sys.num_params();
@@ -109,6 +109,13 @@ void FillGuidanceMessage(const System& sys, const std::string& model, const Advi
     m->names.push_back(sys.params()[static_cast<size_t>(i)].name);
     m->sigmas[static_cast<size_t>(i)] = a.sigma_now[i];
     if (o.targets.size() == n) m->targets[static_cast<size_t>(i)] = o.targets[i];
+  }
+  m->num_path = static_cast<int32_t>(a.path.size());
+  m->path_x.clear();
+  m->path_y.clear();
+  for (const Eigen::Vector3d& q : a.path) {
+    m->path_x.push_back(q.x());
+    m->path_y.push_back(q.y());
   }
 }
 

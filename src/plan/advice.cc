@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "kincal/angles.h"
 #include "plan/shaping.h"
 
 namespace kincal {
@@ -25,6 +26,28 @@ Eigen::VectorXd Scales(const Eigen::MatrixXd& cov, const PlanOptions& o) {
     if (o.targets[i] > 0.0) s[i] = o.targets[i];
   }
   return s;
+}
+
+// The target's pose along `controls` held for horizon_s from rest, relative to its start.
+std::vector<Eigen::Vector3d> PathOf(const System& sys, const Eigen::VectorXd& params,
+                                    const Eigen::MatrixXd& cov, const PlanOptions& o,
+                                    const Values& controls, double horizon_s) {
+  ControlSignal u(sys.num_controls(), 0);
+  Values now{};
+  plan_internal::AppendSlewed(&u, 0.0, horizon_s, controls, o, &now);
+  DesignInformation info(sys, params, cov, o.info);
+  info.StartSegment(Eigen::Vector3d::Zero(), 0.0, u);
+  const Eigen::Vector3d start = info.MeasuredPose();
+  const double c = std::cos(start.z()), s = std::sin(start.z());
+  std::vector<Eigen::Vector3d> path;
+  const int steps = static_cast<int>(std::ceil(horizon_s / Advice::kPathStepS - 1e-9));
+  for (int k = 0; k <= steps; ++k) {
+    if (k > 0) info.Advance(std::min(horizon_s, k * Advice::kPathStepS), u);
+    const Eigen::Vector3d q = info.MeasuredPose();
+    const Eigen::Vector2d d = q.head<2>() - start.head<2>();
+    path.emplace_back(c * d.x() + s * d.y(), -s * d.x() + c * d.y(), WrapAngle(q.z() - start.z()));
+  }
+  return path;
 }
 
 // The worst scored parameter: largest sigma over its target.
@@ -112,6 +135,7 @@ Status Advise(const System& sys, const Eigen::VectorXd& params, const Eigen::Mat
   a.duration_s = horizon_s;
   a.twist = plan_internal::TwistOf(sys, params, a.controls);
   a.motion = DescribeMotion(a.twist, horizon_s);
+  a.path = PathOf(sys, params, cov, o, a.controls, horizon_s);
   a.time_to_target_s = TimeToTargets(sys, params, cov, o);
   *out = std::move(a);
   return Status{};

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <mutex>
 
@@ -64,6 +65,16 @@ TEST(Guidance, AdvisesOnTheLeastDeterminedParameterAtMostEveryPeriod) {
   EXPECT_LT(m.time_to_target_s, 60.0);
   EXPECT_EQ(m.num_params, 4);
   EXPECT_EQ(m.utime, 1'000'000);
+  // The path the motion drives, from the target where it stands, every 0.1 s.
+  EXPECT_EQ(m.num_path, static_cast<int>(std::lround(Options().horizon_s / 0.1)) + 1);
+  ASSERT_EQ(m.path_x.size(), static_cast<size_t>(m.num_path));
+  EXPECT_EQ(m.path_x[0], 0.0);
+  EXPECT_EQ(m.path_y[0], 0.0);
+  // Here a turn in place: the target (no lever arm) stays where it is.
+  ASSERT_NE(m.motion.find("turn in place"), std::string::npos) << m.motion;
+  for (int k = 0; k < m.num_path; ++k) {
+    EXPECT_LT(std::hypot(m.path_x[static_cast<size_t>(k)], m.path_y[static_cast<size_t>(k)]), 1e-9);
+  }
   std::cout << "advice: " << m.parameter << " " << m.sigma << " -> " << m.sigma_after << ": "
             << m.motion << "; " << m.time_to_target_s << " s to the targets\n";
 }

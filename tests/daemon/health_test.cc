@@ -20,7 +20,7 @@ TEST(Health, EveryCounterIsPublishedWhole) {
   HealthReporter r;
   kincal::health_t h;
   r.Build(c, HealthStatus{}, 1.0, 42, &h);
-  EXPECT_EQ(h.schema_version, 7);
+  EXPECT_EQ(h.schema_version, 8);
   EXPECT_EQ(h.control_jitter_p95_ms, 12.5);
   EXPECT_EQ(h.control_jitter_max_ms, 80.0);
   EXPECT_NE(h.message.find("the robot's clock stepped"), std::string::npos) << h.message;

@@ -68,6 +68,35 @@ TEST(Advice, WithoutTargetsNoTimeAndBadOptionsAreStatuses) {
   EXPECT_NE(s.message().find("omega_r"), std::string::npos) << s.message();
 }
 
+// The advised motion's path (drawn by kincal view) is the target's pose along it from where
+// it starts: for a bare diff drive commanded without slewing, the constant twist's arc,
+// written here in closed form (x = v/w sin wt, y = v/w (1 - cos wt)), every 0.1 s.
+TEST(Advice, ThePathIsTheArcTheMotionDrivesFromTheTargetsStart) {
+  const System sys = MakeSystem("diffdrive", {}).value();
+  const Eigen::Vector3d p(0.03, 0.032, 0.3);
+  PlanOptions o;
+  o.max_abs = {20.0, 20.0};
+  o.max_accel = {1e9, 1e9};  // no slewing: the twist is constant from the start
+  o.targets = Eigen::Vector3d(3e-5, 3e-5, 3e-4);
+  o.care = {0, 1, 2};
+  const Eigen::MatrixXd cov = Eigen::Vector3d(1e-3, 1e-3, 1e-2).cwiseAbs2().asDiagonal();
+  Advice a;
+  ASSERT_TRUE(Advise(sys, p, cov, o, 2.5, &a).ok());
+  ASSERT_EQ(a.path.size(), 26u);
+  const double v = 0.5 * (p[0] * a.controls[0] + p[1] * a.controls[1]);
+  const double w = (p[1] * a.controls[1] - p[0] * a.controls[0]) / p[2];
+  std::cout << a.motion << ": v " << v << " m/s, w " << w << " rad/s\n";
+  EXPECT_GT(std::hypot(v, w), 0.1);
+  for (size_t k = 0; k < a.path.size(); ++k) {
+    const double t = 0.1 * static_cast<double>(k);
+    const double x = std::abs(w) < 1e-9 ? v * t : v / w * std::sin(w * t);
+    const double y = std::abs(w) < 1e-9 ? 0.0 : v / w * (1.0 - std::cos(w * t));
+    EXPECT_NEAR(a.path[k].x(), x, 1e-6) << "t " << t;
+    EXPECT_NEAR(a.path[k].y(), y, 1e-6) << "t " << t;
+    EXPECT_NEAR(std::remainder(a.path[k].z() - w * t, 2 * M_PI), 0.0, 1e-6) << "t " << t;
+  }
+}
+
 TEST(Advice, MotionsInWords) {
   EXPECT_EQ(DescribeMotion({0.3, 0.0}, 3.0), "drive forward at 0.30 m/s for 3 s");
   EXPECT_EQ(DescribeMotion({0.0, -1.2}, 2.0), "turn in place right at 1.20 rad/s for 2 s");

@@ -43,7 +43,9 @@ namespace kincal::daemon {
   X(log_events_lost, "events the recorder dropped (live, its queue full)")                  \
   X(guidance_skipped_busy, "estimates offered while the guidance worker was busy: skipped") \
   X(drive_legs, "guidance.drive: legs the simulated robot drove by the plan")               \
-  X(drive_legs_failed, "guidance.drive: legs not planned (no estimate, no leg in view)")
+  X(drive_legs_failed, "guidance.drive: legs not planned (no estimate, no leg in view)")    \
+  X(preview_published, "preview_t pictures published (preview.enabled)")                    \
+  X(preview_skipped, "previews due while the preview worker was busy: skipped (live)")
 #define KINCAL_DAEMON_COUNTERS(X) KINCAL_PIPELINE_COUNTERS(X) KINCAL_ONLINE_COUNTERS(X)
 
 struct DaemonCounters {

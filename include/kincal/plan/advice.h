@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "kincal/control_signal.h"
 #include "kincal/plan/planner.h"
@@ -25,6 +26,11 @@ struct Advice {
   // Predicted driving time to every target along a greedy plan from the estimate (in an
   // open floor): NaN without targets, +inf when 10 minutes are not enough.
   double time_to_target_s = 0.0;
+  // Where the motion takes the target: its measured pose (x, y, theta) every kPathStepS
+  // from the start to duration_s, in the frame of the target where it starts (x ahead, y
+  // to its left), slewing as the limits allow, at the estimate.
+  std::vector<Eigen::Vector3d> path;
+  static constexpr double kPathStepS = 0.1;
 };
 
 // `o` supplies limits, targets, scored parameters and pose noise; `horizon_s` is how long
