@@ -114,9 +114,12 @@ void PrintFinalEstimate(const kincal::daemon::Daemon& daemon) {
   const auto est = daemon.Estimate();
   if (!est.names.empty()) {
     if (est.source == "batch") {
+      const auto c = daemon.counters();
+      const int64_t runs = c.run_resets + (c.updates > 0 ? 1 : 0);  // as the summary line counts
       std::cout << "final estimate: the batch calibration (batch " << est.batch_sequence << " over "
-                << est.batch_poses << " poses of the run; the filter made " << est.update_count
-                << " updates):\n";
+                << est.batch_poses << " poses of "
+                << (runs > 1 ? "its " + std::to_string(runs) + " runs" : std::string("the run"))
+                << "; the filter made " << est.update_count << " updates):\n";
     } else {
       std::cout << "final estimate: the filter's, no batch calibration yet (" << est.update_count
                 << " updates, " << est.filter << "):\n";

@@ -210,6 +210,7 @@ class Car(Fixture):
                            capture_output=True, text=True, timeout=600)
         self.assertEqual(r.returncode, 0, r.stderr)
         self.assertIn("has no frames: its", r.stderr + r.stdout)
+        self.assertIn("poses of its 30 runs;", r.stdout)  # the bags are runs, never joined
         with open(checkpoint) as f:
             c = json.load(f)
         self.assertEqual(c["source"], "batch")
