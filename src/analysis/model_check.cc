@@ -228,6 +228,7 @@ void ModelCheck::Describe(const Suspect* best, double best_z, bool nis_ok,
   if (best == nullptr && nis_ok && count_ < kWindow) {
     ev << "no signature so far; collecting: " << count_ << " of " << kWindow << " innovations";
   } else {
+    if (best == nullptr && nis_ok) ev << "no signature, innovations as expected";
     ev << "; window " << count_ << " innovations";
   }
   v->evidence = ev.str();

@@ -123,6 +123,9 @@ TEST(ModelCheck, CleanRobotYieldsNoVerdict) {
     const ModelCheckVerdict v = RunOnline(0.0, seed);
     EXPECT_TRUE(v.suspected_effect.empty()) << v.suspected_effect << ": " << v.evidence;
     EXPECT_TRUE(v.consistent) << v.evidence;
+    // Said in words, not a bare "; window ..." (seen on kincal view's page).
+    EXPECT_EQ(v.evidence, "no signature, innovations as expected; window " +
+                              std::to_string(ModelCheck::kWindow) + " innovations");
   }
 }
 
