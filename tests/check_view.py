@@ -6,9 +6,9 @@ live:  kincald on the simulated camera with guidance (--preview, paced, on an LC
        the page's own record and in the canvas's pixels; in a screenshot too, on the paused
        recording below), the floor the camera sees with the track, the pose and the
        guidance's advised path (as the last KINCAL_GUIDANCE has it), one chart per
-       parameter named after
-       it, >= 5 updates a second, frames on the page <= 250 ms after their capture, a
-       second browser served at the same time, and once kincald has ended the health the
+       parameter named after it with the scenario's truth (--truth), >= 5 updates a
+       second, frames on the page <= 250 ms after their capture, a second browser served
+       at the same time, and once kincald has ended the health the
        last KINCAL_HEALTH says (the preview's counts too) and "daemon not heard for N s"
        over the picture.
 log:   `kincal view --log` on the recording kincald made: play, pause and the slider move
@@ -175,6 +175,13 @@ def check_screenshot(driver, want, failures, path):
         failures.append(f"screenshot: {hits} of {len(want)} markers' rings seen")
 
 
+def load_truth_map(path):
+    """A scenario's truth: map, read as kincal view reads it."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+    from kincal_view import load_truth
+    return load_truth(path)
+
+
 def check_advised_path(driver, health, failures):
     """The guidance's path on the floor map: as many points as the last KINCAL_GUIDANCE
     carries, as far from its start to its end (the message's path is in the target's frame,
@@ -204,7 +211,8 @@ def live(kincald, kincal, work, failures, timing=True):
     daemon = subprocess.Popen([kincald, "-c", config, "--duration", "25", "--preview", "--lcm-url", url,
                                "--record", log, "-q"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    view = start_view(kincal, ["--lcm-url", url], port)
+    scenario = os.path.join(os.path.dirname(config), "sim_daemon.yaml")  # the config's sim.scenario
+    view = start_view(kincal, ["--lcm-url", url, "--truth", scenario], port)
     driver = browser()
     second = browser()
     try:
@@ -249,6 +257,13 @@ def live(kincald, kincal, work, failures, timing=True):
             "return Array.from(document.querySelectorAll('#charts .chart')).map(d => [d.dataset.param, d.data[0].name])")
         if len(names) != n_params or any(a != b for a, b in names):
             failures.append(f"charts {names} for {n_params} parameters")
+        # The simulated robot's truth (--truth: the scenario's truth: map) on every chart.
+        truth = load_truth_map(scenario)
+        drawn = driver.execute_script(
+            "return Object.fromEntries(Array.from(document.querySelectorAll('#charts .chart')).map("
+            "d => [d.dataset.param, (d.data.find(t => t.name === 'truth') || {y: [null]}).y[0]]))")
+        if not drawn or any(drawn.get(n) != truth.get(n) for n in drawn):
+            failures.append(f"truth on the charts {drawn}, the scenario's {truth}")
         # Garbage on a kincal channel: named on the page, with its channel.
         import lcm
         lcm.LCM(url).publish("KINCAL_HEALTH_X", b"\x00garbage, not a kincal message")
