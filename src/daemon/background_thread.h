@@ -1,8 +1,8 @@
-// Worker threads that must never slow the pipeline (the batch calibration, the preview) run
-// below its threads: nice + kBackgroundNice, about a tenth of a core's share against a busy
-// pipeline thread. Not SCHED_IDLE: that runs only on a core nothing else wants, and on a
-// loaded machine (a robot's computer, a CI run of two test programs) such a worker starved
-// for minutes. Linux keeps the nice value per thread, and threads it starts inherit it.
+// Worker threads that must never slow the pipeline (the batch calibration, the preview, the
+// guidance) run below its threads: nice + kBackgroundNice, about a tenth of a core's share
+// against a busy pipeline thread. Not SCHED_IDLE: that runs only on a core nothing else wants, and
+// on a loaded machine (a robot's computer, a CI run of two test programs) such a worker starved for
+// minutes. Linux keeps the nice value per thread, and threads it starts inherit it.
 #pragma once
 
 #include <sys/resource.h>

@@ -1,5 +1,6 @@
 #include "daemon/guidance.h"
 
+#include "daemon/background_thread.h"
 #include "daemon/messages.h"
 
 namespace kincal::daemon {
@@ -66,6 +67,9 @@ std::string Guidance::last_error() const {
 }
 
 void Guidance::Loop() {
+  // Advice is seconds of planning: below the pipeline, as the batch and preview workers
+  // (a worker at the pipeline's priority delayed frames by seconds on a loaded 2-core machine).
+  RunThisThreadInTheBackground();
   std::unique_lock lock(mu_);
   while (true) {
     cv_.wait(lock, [this] { return stop_ || pending_.has_value(); });
