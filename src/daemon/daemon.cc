@@ -133,10 +133,12 @@ struct Daemon::Impl {
                                    cfg.lcm.publish_markers, cfg.pose.sigma_px},
                   &out, &frame_q, &pose_q, &counters, preview.get()) {
     if (cfg.guidance.enabled) {
-      guidance = std::make_unique<Guidance>(cfg.guidance,
-                                            [this](int64_t utime, const kincal::guidance_t& m) {
-                                              out.Publish(cfg.lcm.guidance_channel, utime, m);
-                                            });
+      guidance = std::make_unique<Guidance>(
+          cfg.guidance,
+          [this](int64_t utime, const kincal::guidance_t& m) {
+            out.Publish(cfg.lcm.guidance_channel, utime, m);
+          },
+          /*background=*/!caps.lossless);
     }
   }
 

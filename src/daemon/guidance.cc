@@ -18,8 +18,11 @@ Status GuidancePlanningFrom(const GuidanceOptions& g, const Checkpoint& estimate
   return Status{};
 }
 
-Guidance::Guidance(const GuidanceOptions& options, Publish publish)
-    : opt_(options), publish_(std::move(publish)), thread_([this] { Loop(); }) {}
+Guidance::Guidance(const GuidanceOptions& options, Publish publish, bool background)
+    : opt_(options),
+      publish_(std::move(publish)),
+      background_(background),
+      thread_([this] { Loop(); }) {}
 
 Guidance::~Guidance() {
   {
@@ -67,9 +70,10 @@ std::string Guidance::last_error() const {
 }
 
 void Guidance::Loop() {
-  // Advice is seconds of planning: below the pipeline, as the batch and preview workers
-  // (a worker at the pipeline's priority delayed frames by seconds on a loaded 2-core machine).
-  RunThisThreadInTheBackground();
+  // Live, advice is seconds of planning: below the pipeline, as the batch worker (at the
+  // pipeline's priority it delayed frames by seconds on a loaded 2-core machine). Lossless,
+  // the pipeline never idles and a lowered worker would starve: offers would be skipped.
+  if (background_) RunThisThreadInTheBackground();
   std::unique_lock lock(mu_);
   while (true) {
     cv_.wait(lock, [this] { return stop_ || pending_.has_value(); });

@@ -32,8 +32,9 @@ Status GuidancePlanningFrom(const GuidanceOptions& g, const Checkpoint& estimate
 class Guidance {
  public:
   using Publish = std::function<void(int64_t utime, const kincal::guidance_t&)>;
-  // `options` must be valid for the configured robot (DaemonConfig::IsValid).
-  Guidance(const GuidanceOptions& options, Publish publish);
+  // `options` must be valid for the configured robot (DaemonConfig::IsValid). `background`:
+  // the worker runs below the pipeline (live; background_thread.h).
+  Guidance(const GuidanceOptions& options, Publish publish, bool background = false);
   ~Guidance();
   Guidance(const Guidance&) = delete;
   Guidance& operator=(const Guidance&) = delete;
@@ -54,6 +55,7 @@ class Guidance {
 
   const GuidanceOptions opt_;
   const Publish publish_;
+  const bool background_;
   mutable std::mutex mu_;
   std::condition_variable cv_;
   bool stop_ = false, busy_ = false;
