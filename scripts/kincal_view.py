@@ -221,12 +221,12 @@ class Timeline:
     def _advised_path(self, guidance):
         """The guidance's path on the floor: from the target's pose at the estimate it
         advised on (its path is in that pose's frame); None without one."""
-        if not guidance or not guidance.get("path") or not self.poses:
+        if not guidance or not guidance.get("path"):
             return None
-        i = bisect.bisect_right([u for u, _ in self.poses], guidance["utime"])
-        if i == 0:
+        pose = self._at(self.poses, guidance["utime"])
+        if pose is None:
             return None
-        x0, y0, th = self.poses[i - 1][1]
+        x0, y0, th = pose
         c, s = math.cos(th), math.sin(th)
         return [[x0 + c * x - s * y, y0 + s * x + c * y] for x, y in guidance["path"]]
 
