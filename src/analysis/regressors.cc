@@ -102,12 +102,15 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
   const auto& u = d.rec->controls;
   const double dt = kLagStepS, half = kLagHalfS;
   std::vector<double> vm, wm, tgrid;
+  // The window's ends walk forward with the grid (the first pose at or after each end, as
+  // a binary search finds it, in one pass: a thinned store spans hours of grid).
+  const size_t num_poses = d.t.size();
+  size_t i = 0, j = 0;
   for (double t = std::max(d.t.front(), d.t_ctrl0) + half; t < d.t_split - half; t += dt) {
+    while (i < num_poses && d.t[i] < t - half) ++i;
+    while (j < num_poses && d.t[j] < t + half) ++j;
+    if (i == num_poses || j == num_poses || j <= i) continue;
     if (d.HeldOutAt(t)) continue;
-    const auto a = std::lower_bound(d.t.begin(), d.t.end(), t - half);
-    const auto b = std::lower_bound(d.t.begin(), d.t.end(), t + half);
-    if (a == d.t.end() || b == d.t.end() || b <= a) continue;
-    const size_t i = static_cast<size_t>(a - d.t.begin()), j = static_cast<size_t>(b - d.t.begin());
     if (d.by_runs && d.run[i] != d.run[j]) continue;  // never across a run's start
     const double span = d.t[j] - d.t[i];
     if (span < half || span > 4 * half) continue;
