@@ -93,15 +93,18 @@ void ComputeFeatures(Dataset* d, const System& bare, const Eigen::VectorXd& p) {
   }
 }
 
-// Lag (s) by which the measured motion follows the commanded one, from the
-// cross-correlation of measured and commanded forward speed and turn rate over lags in
-// [-5, 5] s. The start for timing effects: a clock offset of seconds is far outside the
-// basin of a local fit started at zero.
-double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::VectorXd& p) {
+namespace {
+
+// The measured forward speed and turn rate over windows of +-kLagHalfS around a grid every
+// kLagStepS of the fitted (not held-out) span, and the grid's times.
+struct MeasuredMotion {
+  std::vector<double> v, w, t;
+};
+
+MeasuredMotion SampleMeasuredMotion(const Dataset& d) {
   const auto& P = d.rec->poses;
-  const auto& u = d.rec->controls;
   const double dt = kLagStepS, half = kLagHalfS;
-  std::vector<double> vm, wm, tgrid;
+  MeasuredMotion m;
   // The window's ends walk forward with the grid (the first pose at or after each end, as
   // a binary search finds it, in one pass: a thinned store spans hours of grid).
   const size_t num_poses = d.t.size();
@@ -116,10 +119,23 @@ double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::Vec
     if (span < half || span > 4 * half) continue;
     const Eigen::Vector2d dp = P[j].z.head<2>() - P[i].z.head<2>();
     const double th = P[i].z.z() + 0.5 * WrapAngle(P[j].z.z() - P[i].z.z());
-    vm.push_back((std::cos(th) * dp.x() + std::sin(th) * dp.y()) / span);
-    wm.push_back(WrapAngle(P[j].z.z() - P[i].z.z()) / span);
-    tgrid.push_back(t);
+    m.v.push_back((std::cos(th) * dp.x() + std::sin(th) * dp.y()) / span);
+    m.w.push_back(WrapAngle(P[j].z.z() - P[i].z.z()) / span);
+    m.t.push_back(t);
   }
+  return m;
+}
+
+}  // namespace
+
+// Lag (s) by which the measured motion follows the commanded one, from the
+// cross-correlation of measured and commanded forward speed and turn rate over lags in
+// [-5, 5] s. The start for timing effects: a clock offset of seconds is far outside the
+// basin of a local fit started at zero.
+double EstimateCommandLag(const Dataset& d, const System& bare, const Eigen::VectorXd& p) {
+  const auto& u = d.rec->controls;
+  const MeasuredMotion measured = SampleMeasuredMotion(d);
+  const std::vector<double>&vm = measured.v, &wm = measured.w, &tgrid = measured.t;
   if (vm.size() < kMinLagSamples) return 0.0;
   auto corr = [](const std::vector<double>& a, const std::vector<double>& b) {
     const double n = static_cast<double>(a.size());
