@@ -23,17 +23,17 @@ std::pair<double, double> Chi2Band(int dof) {
   return kBand.at(dof);
 }
 
-struct Case {
+struct ConsistencyCase {
   int model;
   bool control_noise;
   std::vector<std::string> effects;
   std::vector<std::pair<std::string, double>> effect_truth;
 };
 
-class Consistency : public ::testing::TestWithParam<Case> {};
+class Consistency : public ::testing::TestWithParam<ConsistencyCase> {};
 
 TEST_P(Consistency, NeesInside95PercentBand) {
-  const Case c = GetParam();
+  const ConsistencyCase c = GetParam();
   auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
   const bool control_noise = c.control_noise;
   const System sys = MakeSystem(sc.model, c.effects).value();
@@ -91,7 +91,7 @@ TEST_P(Consistency, NeesInside95PercentBand) {
   EXPECT_GE(inside, static_cast<int>(0.9 * runs)) << sc.model;
 }
 
-std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
+std::string ConsistencyCaseName(const ::testing::TestParamInfo<ConsistencyCase>& info) {
   std::string name = AllModelScenarios()[static_cast<size_t>(info.param.model)].model;
   if (info.param.control_noise) name += "_control_noise";
   for (const auto& e : info.param.effects) name += "_" + e;
@@ -100,19 +100,19 @@ std::string CaseName(const ::testing::TestParamInfo<Case>& info) {
 
 INSTANTIATE_TEST_SUITE_P(
     AllModels, Consistency,
-    ::testing::Values(Case{0, false, {}, {}}, Case{1, false, {}, {}}, Case{2, false, {}, {}},
-                      Case{3, false, {}, {}}, Case{0, true, {}, {}}, Case{1, true, {}, {}},
-                      Case{2, true, {}, {}}, Case{3, true, {}, {}},
-                      Case{1,
-                           false,
-                           {"time_offset", "lever_arm"},
-                           {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
-                      Case{0, false, {"actuator_lag"}, {{"tau_s", 0.12}}},
-                      Case{2,
-                           false,
-                           {"lateral_slip", "yaw_rate_bias"},
-                           {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
-    CaseName);
+    ::testing::Values(
+        ConsistencyCase{0, false, {}, {}}, ConsistencyCase{1, false, {}, {}},
+        ConsistencyCase{2, false, {}, {}}, ConsistencyCase{3, false, {}, {}},
+        ConsistencyCase{0, true, {}, {}}, ConsistencyCase{1, true, {}, {}},
+        ConsistencyCase{2, true, {}, {}}, ConsistencyCase{3, true, {}, {}},
+        ConsistencyCase{1,
+                        false,
+                        {"time_offset", "lever_arm"},
+                        {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
+        ConsistencyCase{0, false, {"actuator_lag"}, {{"tau_s", 0.12}}},
+        ConsistencyCase{
+            2, false, {"lateral_slip", "yaw_rate_bias"}, {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
+    ConsistencyCaseName);
 
 }  // namespace
 }  // namespace kincal

@@ -14,13 +14,14 @@ namespace {
 
 using testing::AllModelScenarios;
 
-struct Case {
+struct RecoveryCase {
   int model;
   std::vector<std::string> effects;
   std::vector<std::pair<std::string, double>> effect_truth;
 };
 
-VecN<kMaxState> TruthParams(const System& sys, const testing::ModelScenario& sc, const Case& c) {
+VecN<kMaxState> TruthParams(const System& sys, const testing::ModelScenario& sc,
+                            const RecoveryCase& c) {
   VecN<kMaxState> p(sys.num_params());
   for (int i = 0; i < sys.num_params(); ++i) {
     p[i] = i < static_cast<int>(sc.truth.size()) ? sc.truth[static_cast<size_t>(i)] : 0.0;
@@ -38,10 +39,10 @@ VecN<kMaxState> Guess(const System& sys, const VecN<kMaxState>& truth) {
   return g;
 }
 
-class Recovery : public ::testing::TestWithParam<Case> {};
+class Recovery : public ::testing::TestWithParam<RecoveryCase> {};
 
 TEST_P(Recovery, FilterAndBatchRecoverTruthWithin3Sigma) {
-  const Case c = GetParam();
+  const RecoveryCase c = GetParam();
   const auto sc = AllModelScenarios()[static_cast<size_t>(c.model)];
   const System sys = MakeSystem(sc.model, c.effects).value();
   const VecN<kMaxState> truth = TruthParams(sys, sc, c);
@@ -85,13 +86,15 @@ TEST_P(Recovery, FilterAndBatchRecoverTruthWithin3Sigma) {
 INSTANTIATE_TEST_SUITE_P(
     Models, Recovery,
     ::testing::Values(
-        Case{0, {}, {}}, Case{1, {}, {}}, Case{2, {}, {}}, Case{3, {}, {}},
-        Case{1,
-             {"time_offset", "lever_arm"},
-             {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
-        Case{0, {"actuator_lag"}, {{"tau_s", 0.12}}},
-        Case{2, {"lateral_slip", "yaw_rate_bias"}, {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
-    [](const ::testing::TestParamInfo<Case>& info) {
+        RecoveryCase{0, {}, {}}, RecoveryCase{1, {}, {}}, RecoveryCase{2, {}, {}},
+        RecoveryCase{3, {}, {}},
+        RecoveryCase{1,
+                     {"time_offset", "lever_arm"},
+                     {{"delay_s", 0.15}, {"dx", 0.1}, {"dy", -0.03}, {"dtheta", 0.05}}},
+        RecoveryCase{0, {"actuator_lag"}, {{"tau_s", 0.12}}},
+        RecoveryCase{
+            2, {"lateral_slip", "yaw_rate_bias"}, {{"c_slip", 0.02}, {"bias_rad_s", 0.03}}}),
+    [](const ::testing::TestParamInfo<RecoveryCase>& info) {
       std::string name = AllModelScenarios()[static_cast<size_t>(info.param.model)].model;
       for (const auto& e : info.param.effects) name += "_" + e;
       return name;

@@ -37,7 +37,7 @@ std::string Tmp(const std::string& name) {
 }
 
 // /dev/videoN whose sysfs name is `name`.
-std::string FindNode(const std::string& name) {
+std::string FindVimcNode(const std::string& name) {
   for (const auto& e : fs::directory_iterator("/sys/class/video4linux")) {
     std::ifstream in(e.path() / "name");
     std::string n;
@@ -99,7 +99,7 @@ std::vector<Frame> StartAndCapture(const LibcameraOptions& o, int n,
 TEST(VmVimc, V4l2OnAnUnconfiguredPipelineSaysWhatIsMissing) {
   RequireVm();
   V4l2Options o;
-  o.device = FindNode("RGB/YUV Capture");
+  o.device = FindVimcNode("RGB/YUV Capture");
   ASSERT_FALSE(o.device.empty());
   o.pixel_format = PixelFormat::kBgr24;
   auto src = MakeV4l2Source(o);
@@ -198,7 +198,7 @@ TEST(VmVimc, SizeAndRateAreHonouredOrReportedAsAdjusted) {
 TEST(VmVimc, V4l2StreamsOnceThePipelineIsConfigured) {
   RequireVm();
   V4l2Options o;
-  o.device = FindNode("RGB/YUV Capture");
+  o.device = FindVimcNode("RGB/YUV Capture");
   v4l2_format fmt{};
   {
     const int fd = open(o.device.c_str(), O_RDWR);
@@ -370,7 +370,7 @@ TEST(VmVimc, ASecondProcessHoldingTheCameraGetsAClearError) {
   ASSERT_EQ(fscanf(p, "%d", &pid), 1);
   pclose(p);
   // Streaming once it has the capture node open.
-  const std::string node = FindNode("RGB/YUV Capture");
+  const std::string node = FindVimcNode("RGB/YUV Capture");
   bool holding = false;
   for (int i = 0; i < 200 && !holding; ++i) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));

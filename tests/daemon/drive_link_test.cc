@@ -22,7 +22,7 @@ namespace {
 
 using namespace std::chrono_literals;
 
-GuidanceOptions Options() {
+GuidanceOptions DriveOptions() {
   GuidanceOptions g;
   g.enabled = true;
   g.drive = true;
@@ -32,7 +32,7 @@ GuidanceOptions Options() {
   return g;
 }
 
-Checkpoint Estimate(int64_t utime) {
+Checkpoint DriveEstimate(int64_t utime) {
   Checkpoint c;
   c.model = "diffdrive";
   c.utime = utime;
@@ -45,14 +45,14 @@ Checkpoint Estimate(int64_t utime) {
 std::unique_ptr<Workspace> Floor() { return MakeArena(-1.0, -1.0, 1.0, 1.0); }
 
 TEST(DriveLink, PlansTheLegFromTheFirstEstimateMadeAtRest) {
-  DriveLink link(Options(), Floor());
-  Checkpoint wrong = Estimate(0);
-  wrong.values.pop_back();    // would fail the plan if it were the one used
-  link.Offer(Estimate(500));  // before any leg is expected: ignored
+  DriveLink link(DriveOptions(), Floor());
+  Checkpoint wrong = DriveEstimate(0);
+  wrong.values.pop_back();         // would fail the plan if it were the one used
+  link.Offer(DriveEstimate(500));  // before any leg is expected: ignored
   link.Expect(1'000);
   wrong.utime = 900;
   link.Offer(wrong);  // before the rest began
-  link.Offer(Estimate(1'000));
+  link.Offer(DriveEstimate(1'000));
   wrong.utime = 1'100;
   link.Offer(wrong);  // after the one kept
   ControlSignal leg;
@@ -81,14 +81,14 @@ TEST(DriveLink, PlansTheLegFromTheFirstEstimateMadeAtRest) {
 
 // From a pose near the edge, heading out: the leg keeps the target inside.
 TEST(DriveLink, TheLegKeepsTheTargetInViewFromWhereTheRobotStands) {
-  DriveLink link(Options(), Floor());
+  DriveLink link(DriveOptions(), Floor());
   link.Expect(1'000);
-  link.Offer(Estimate(1'000));
+  link.Offer(DriveEstimate(1'000));
   const Eigen::Vector3d pose(0.75, 0.0, 0.0);  // 25 cm from the edge, heading at it
   ControlSignal leg;
   ASSERT_TRUE(link.NextLeg(pose, 50.0, 1s, &leg).ok());
   const System sys = MakeSystem("diffdrive", {}).value();
-  const Checkpoint e = Estimate(0);
+  const Checkpoint e = DriveEstimate(0);
   StateVec x = sys.MakeState(pose.x(), pose.y(), pose.z(),
                              Eigen::Map<const Eigen::VectorXd>(e.values.data(), 3), leg, 0.0);
   const auto arena = Floor();
@@ -104,9 +104,9 @@ TEST(DriveLink, TheLegKeepsTheTargetInViewFromWhereTheRobotStands) {
 }
 
 TEST(DriveLink, NoEstimateIsAnErrorAfterTheWaitAndCancelWakesAWait) {
-  DriveLink link(Options(), Floor());
+  DriveLink link(DriveOptions(), Floor());
   link.Expect(1'000);
-  link.Offer(Estimate(999));
+  link.Offer(DriveEstimate(999));
   ControlSignal leg;
   Status s = link.NextLeg(Eigen::Vector3d::Zero(), 50.0, 50ms, &leg);
   ASSERT_FALSE(s.ok());
@@ -125,7 +125,7 @@ TEST(DriveLink, NoEstimateIsAnErrorAfterTheWaitAndCancelWakesAWait) {
 
 TEST(DriveConfig, DriveNeedsGuidanceTheSimulatorAndAnEstimateWhileResting) {
   DaemonConfig c = test_util::SimConfig(5);
-  c.guidance = Options();
+  c.guidance = DriveOptions();
   std::string error;
   EXPECT_TRUE(c.IsValid(&error)) << error;
   c.source = SourceKind::kReplay;
@@ -133,11 +133,11 @@ TEST(DriveConfig, DriveNeedsGuidanceTheSimulatorAndAnEstimateWhileResting) {
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.drive needs source: sim"), std::string::npos) << error;
   c = test_util::SimConfig(5);
-  c.guidance = Options();
+  c.guidance = DriveOptions();
   c.guidance.drive_pause_s = 0.1;  // params_t at 10 Hz: one period
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.drive_pause_s must be at least two"), std::string::npos) << error;
-  c.guidance = Options();
+  c.guidance = DriveOptions();
   c.guidance.enabled = false;
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.drive needs guidance.enabled"), std::string::npos) << error;

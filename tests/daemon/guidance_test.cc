@@ -17,7 +17,7 @@
 namespace kincal::daemon {
 namespace {
 
-GuidanceOptions Options() {
+GuidanceOptions GuidanceTestOptions() {
   GuidanceOptions g;
   g.enabled = true;
   g.every_s = 2.0;
@@ -26,7 +26,7 @@ GuidanceOptions Options() {
   return g;
 }
 
-Checkpoint Estimate(int64_t utime, double tau_sigma) {
+Checkpoint GuidanceEstimate(int64_t utime, double tau_sigma) {
   Checkpoint c;
   c.model = "diffdrive";
   c.effects = {"actuator_lag"};
@@ -40,15 +40,15 @@ Checkpoint Estimate(int64_t utime, double tau_sigma) {
 TEST(Guidance, AdvisesOnTheLeastDeterminedParameterAtMostEveryPeriod) {
   std::mutex mu;
   std::vector<kincal::guidance_t> got;
-  Guidance g(Options(), [&](int64_t, const kincal::guidance_t& m) {
+  Guidance g(GuidanceTestOptions(), [&](int64_t, const kincal::guidance_t& m) {
     std::lock_guard lock(mu);
     got.push_back(m);
   });
-  g.Offer(Estimate(1'000'000, 0.05));
+  g.Offer(GuidanceEstimate(1'000'000, 0.05));
   g.Drain();
-  g.Offer(Estimate(2'000'000, 0.05));  // 1 s later: not yet
+  g.Offer(GuidanceEstimate(2'000'000, 0.05));  // 1 s later: not yet
   g.Drain();
-  g.Offer(Estimate(3'500'000, 0.05));  // 2.5 s after the first
+  g.Offer(GuidanceEstimate(3'500'000, 0.05));  // 2.5 s after the first
   g.Drain();
   ASSERT_EQ(got.size(), 2u);
   EXPECT_EQ(g.advised(), 2);
@@ -66,7 +66,7 @@ TEST(Guidance, AdvisesOnTheLeastDeterminedParameterAtMostEveryPeriod) {
   EXPECT_EQ(m.num_params, 4);
   EXPECT_EQ(m.utime, 1'000'000);
   // The path the motion drives, from the target where it stands, every 0.1 s.
-  EXPECT_EQ(m.num_path, static_cast<int>(std::lround(Options().horizon_s / 0.1)) + 1);
+  EXPECT_EQ(m.num_path, static_cast<int>(std::lround(GuidanceTestOptions().horizon_s / 0.1)) + 1);
   ASSERT_EQ(m.path_x.size(), static_cast<size_t>(m.num_path));
   EXPECT_EQ(m.path_x[0], 0.0);
   EXPECT_EQ(m.path_y[0], 0.0);
@@ -81,8 +81,8 @@ TEST(Guidance, AdvisesOnTheLeastDeterminedParameterAtMostEveryPeriod) {
 
 TEST(Guidance, AnEstimateItCannotUseIsAnErrorNotACrash) {
   int published = 0;
-  Guidance g(Options(), [&](int64_t, const kincal::guidance_t&) { ++published; });
-  Checkpoint bad = Estimate(1'000'000, 0.05);
+  Guidance g(GuidanceTestOptions(), [&](int64_t, const kincal::guidance_t&) { ++published; });
+  Checkpoint bad = GuidanceEstimate(1'000'000, 0.05);
   bad.values.pop_back();
   g.Offer(bad);
   g.Drain();
@@ -92,18 +92,18 @@ TEST(Guidance, AnEstimateItCannotUseIsAnErrorNotACrash) {
 
 TEST(GuidanceConfig, LimitsAndTargetsMustNameTheRobots) {
   DaemonConfig c = test_util::SimConfig(5);
-  c.guidance = Options();
+  c.guidance = GuidanceTestOptions();
   c.guidance.targets = {{"r_l", 3e-5}};
   std::string error;
   EXPECT_TRUE(c.IsValid(&error)) << error;
   c.guidance.limits.erase("omega_r");
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.limits: omega_r=.. missing"), std::string::npos) << error;
-  c.guidance = Options();
+  c.guidance = GuidanceTestOptions();
   c.guidance.targets = {{"wheelbase", 1e-3}};
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.targets: 'wheelbase'"), std::string::npos) << error;
-  c.guidance = Options();
+  c.guidance = GuidanceTestOptions();
   c.guidance.horizon_s = 0;
   EXPECT_FALSE(c.IsValid(&error));
   EXPECT_NE(error.find("guidance.horizon_s"), std::string::npos) << error;
@@ -113,7 +113,7 @@ TEST(GuidanceConfig, LimitsAndTargetsMustNameTheRobots) {
 // of data, and the time it predicts to the targets falls as the estimate converges.
 TEST(GuidanceDaemon, ASimulatedRunPublishesAdviceThatGetsEasier) {
   DaemonConfig c = test_util::SimConfig(30);
-  c.guidance = Options();
+  c.guidance = GuidanceTestOptions();
   c.guidance.every_s = 5.0;
   c.guidance.targets = {{"r_l", 3e-5}, {"r_r", 3e-5}, {"d", 3e-4}};
   c.guidance.limits = {{"omega_l", 25.0}, {"omega_r", 25.0}, {"accel", 50.0}};

@@ -29,7 +29,7 @@ kincal::pose_t Mocap(double x, double y, double theta) {
 
 constexpr std::array<double, 3> kSigma{0.002, 0.003, 0.01};
 
-struct Fixture {
+struct PoseFixture {
   Publisher publisher;  // not opened: nothing is published or recorded
   BoundedQueue<PoseSample> queue{16, FullPolicy::kDropOldest};
   CounterSet counters;
@@ -37,7 +37,7 @@ struct Fixture {
 };
 
 TEST(PoseReceiver, QueuesALoggedPoseShiftedWithTheConfiguredNoiseWhereItHasNone) {
-  Fixture f;
+  PoseFixture f;
   const auto buf = Encoded(Mocap(1.25, -0.5, 0.3));
   f.receiver.OnMessage(buf.data(), buf.size(), 40'000'000);
   PoseSample p;
@@ -77,7 +77,7 @@ TEST(PoseReceiver, KeepsALoggedCovarianceThatIsOne) {
 }
 
 TEST(PoseReceiver, AnInvalidPoseIsQueuedAsOneWithoutTheTarget) {
-  Fixture f;
+  PoseFixture f;
   kincal::pose_t m = Mocap(0, 0, 0);
   m.valid = 0;
   const auto buf = Encoded(m);
@@ -89,7 +89,7 @@ TEST(PoseReceiver, AnInvalidPoseIsQueuedAsOneWithoutTheTarget) {
 }
 
 TEST(PoseReceiver, RejectsAndNamesWhatIsNotAPose) {
-  Fixture f;
+  PoseFixture f;
   const auto buf = Encoded(Mocap(std::numeric_limits<double>::quiet_NaN(), 0, 0));
   f.receiver.OnMessage(buf.data(), buf.size(), 0);
   EXPECT_NE(f.receiver.last_reject().find("not finite"), std::string::npos)

@@ -18,7 +18,7 @@
 namespace kincal::daemon {
 namespace {
 
-struct Heard {
+struct PreviewHeard {
   std::vector<kincal::preview_t> frames;
   void On(const lcm::ReceiveBuffer*, const std::string&, const kincal::preview_t* m) {
     frames.push_back(*m);
@@ -51,8 +51,8 @@ TEST(Preview, TheScaleIsTheSmallestWholeFactorThatFits) {
 TEST(Preview, LosslessPublishesAtTheRateByFrameTimeAndDecodesToTheFrame) {
   Publisher pub;
   ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
-  Heard heard;
-  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  PreviewHeard heard;
+  pub.lcm()->subscribe("PREVIEW", &PreviewHeard::On, &heard);
   PreviewOptions o;
   o.rate_hz = 5;
   o.width = 640;
@@ -101,8 +101,8 @@ TEST(Preview, LosslessPublishesAtTheRateByFrameTimeAndDecodesToTheFrame) {
 TEST(Preview, AFactorOfThreeCutsTheEdgeAndKeepsTheMapping) {
   Publisher pub;
   ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
-  Heard heard;
-  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  PreviewHeard heard;
+  pub.lcm()->subscribe("PREVIEW", &PreviewHeard::On, &heard);
   {
     PreviewOptions o;
     o.width = 480;
@@ -162,8 +162,8 @@ TEST(Preview, LiveNeverWaitsAndCountsWhatItSkips) {
 TEST(Preview, ThePosesAxesTravelWithThePreview) {
   Publisher pub;
   ASSERT_TRUE(OpenInProcess(&pub, /*lossless=*/true));
-  Heard heard;
-  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  PreviewHeard heard;
+  pub.lcm()->subscribe("PREVIEW", &PreviewHeard::On, &heard);
   PreviewOptions o;
   o.rate_hz = 5;
   {
@@ -203,8 +203,8 @@ TEST(Preview, KincaldsStageProjectsThroughItsCamera) {
   EXPECT_EQ(MakePreviewStage(c, v, &pub, true), nullptr);
   c.preview.enabled = true;
   c.lcm.preview_channel = "PREVIEW";
-  Heard heard;
-  pub.lcm()->subscribe("PREVIEW", &Heard::On, &heard);
+  PreviewHeard heard;
+  pub.lcm()->subscribe("PREVIEW", &PreviewHeard::On, &heard);
   const Eigen::Vector3d pose(0.2, 0.1, 0.0);
   {
     const std::unique_ptr<PreviewStage> preview = MakePreviewStage(c, v, &pub, true);

@@ -16,7 +16,7 @@ namespace {
 
 using namespace test_util;
 
-struct Heard {
+struct PublisherHeard {
   std::map<std::string, int> count;
   void On(const lcm::ReceiveBuffer*, const std::string& channel) { ++count[channel]; }
 };
@@ -29,8 +29,8 @@ TEST(Publisher, EachMessageGoesWhereItIsSent) {
   rec.path = path;
   Publisher pub;
   ASSERT_TRUE(pub.Open(lcm_opt, rec, 16, /*lossless=*/true).ok());
-  Heard heard;
-  pub.lcm()->subscribe(".*", &Heard::On, &heard);
+  PublisherHeard heard;
+  pub.lcm()->subscribe(".*", &PublisherHeard::On, &heard);
   kincal::pose_t pose{};
   pose.schema_version = 1;
   pose.x = 1.25;

@@ -105,11 +105,11 @@ void WriteMocapLog(const std::string& path, int poses, bool with_controls = true
   }
 }
 
-struct Heard {
+struct ReplayHeard {
   std::vector<std::pair<char, int64_t>> events;  // 'c' control (receive utime), 'p' pose
 };
 
-std::unique_ptr<FrameSource> MocapSource(const std::string& path, int loops, Heard* heard) {
+std::unique_ptr<FrameSource> MocapSource(const std::string& path, int loops, ReplayHeard* heard) {
   ReplayOptions r;
   r.path = path;
   r.speed = 0;
@@ -127,7 +127,7 @@ std::unique_ptr<FrameSource> MocapSource(const std::string& path, int loops, Hea
 TEST(ReplaySource, ALogWithoutFramesHandsOverItsPosesInOrderWithTheControls) {
   const std::string path = TempPath("mocap.lcm");
   WriteMocapLog(path, 20);
-  Heard heard;
+  ReplayHeard heard;
   auto src = MocapSource(path, 2, &heard);
   ASSERT_TRUE(src->Start().ok());
   Counted n;
@@ -169,7 +169,7 @@ TEST(ReplaySource, ALogWithNeitherFramesNorPosesIsNamed) {
     u.num_controls = 0;
     PutMessage(out, "KINCAL_CONTROLS", u, 0);
   }
-  Heard heard;
+  ReplayHeard heard;
   const Status s = MocapSource(path, 1, &heard)->Start();
   ASSERT_FALSE(s.ok());
   EXPECT_NE(s.message().find("controls_only.lcm: no frames on KINCAL_FRAME and no poses on "

@@ -15,7 +15,7 @@ namespace kincal {
 namespace {
 
 template <typename Msg>
-std::vector<uint8_t> Encode(const Msg& m) {
+std::vector<uint8_t> EncodeGuardMessage(const Msg& m) {
   std::vector<uint8_t> buf(static_cast<size_t>(m.getEncodedSize()));
   m.encode(buf.data(), 0, static_cast<int>(buf.size()));
   return buf;
@@ -43,12 +43,12 @@ void PutInt32(std::vector<uint8_t>* buf, size_t at, int32_t v) {
 
 TEST(LcmGuard, RealControlsPassAndHostileCountsAreRejected) {
   const controls_t m = Controls(2);
-  std::vector<uint8_t> buf = Encode(m);
+  std::vector<uint8_t> buf = EncodeGuardMessage(m);
   std::string why;
   EXPECT_TRUE(PlausibleControls(buf.data(), buf.size(), 8, &why)) << why;
   // More entries than the model allows.
   const controls_t many = Controls(9);
-  const auto big = Encode(many);
+  const auto big = EncodeGuardMessage(many);
   EXPECT_FALSE(PlausibleControls(big.data(), big.size(), 8, &why));
   EXPECT_FALSE(why.empty());
   // A count of 2^31 - 1 in a message of a few dozen bytes.
@@ -69,7 +69,7 @@ TEST(LcmGuard, FrameSizeMustEqualTheBytesThatRemain) {
   f.pixel_format = "GREY";
   f.size = 8;
   f.data.assign(8, 7);
-  std::vector<uint8_t> buf = Encode(f);
+  std::vector<uint8_t> buf = EncodeGuardMessage(f);
   std::string why;
   EXPECT_TRUE(PlausibleFrame(buf.data(), buf.size(), &why)) << why;
   EXPECT_FALSE(PlausibleFrame(buf.data(), buf.size() - 1, &why));
@@ -87,7 +87,7 @@ TEST(LcmGuard, ParamsWithinTheLimitPass) {
   p.values = {1.0, 1.0};
   p.sigmas = {0.1, 0.1};
   p.covariance = {{0.01, 0.0}, {0.0, 0.01}};
-  std::vector<uint8_t> buf = Encode(p);
+  std::vector<uint8_t> buf = EncodeGuardMessage(p);
   std::string why;
   EXPECT_TRUE(PlausibleParams(buf.data(), buf.size(), 64, &why)) << why;
   EXPECT_FALSE(PlausibleParams(buf.data(), buf.size(), 1, &why));

@@ -10,7 +10,7 @@
 namespace kincal {
 namespace {
 
-Checkpoint Estimate(const std::string& model, const std::map<std::string, double>& v) {
+Checkpoint CheckpointOf(const std::string& model, const std::map<std::string, double>& v) {
   Checkpoint c;
   c.model = model;
   for (const auto& [name, value] : v) {
@@ -37,7 +37,7 @@ std::map<std::string, double> Parse(const std::string& yaml) {
 }
 
 TEST(Ros2Control, DiffDriveMultipliersGiveTheCalibratedWheelsAndTrack) {
-  const auto c = Estimate("diffdrive", {{"r_l", 0.0342}, {"r_r", 0.0336}, {"d", 0.172}});
+  const auto c = CheckpointOf("diffdrive", {{"r_l", 0.0342}, {"r_r", 0.0336}, {"d", 0.172}});
   for (const bool nominal : {false, true}) {
     Ros2ControlOptions o;
     if (nominal) o.nominal = {{"wheel_radius", 0.035}, {"wheel_separation", 0.17}};
@@ -56,7 +56,7 @@ TEST(Ros2Control, DiffDriveMultipliersGiveTheCalibratedWheelsAndTrack) {
 TEST(Ros2Control, UnicycleScalesOnNominalWheels) {
   // Realised v = k_v v, omega = k_omega omega on a differential drive configured with
   // (r0, d0): radii k_v r0 and track d0 k_v / k_omega give exactly those.
-  const auto c = Estimate("unicycle", {{"k_v", 0.95}, {"k_omega", 1.05}});
+  const auto c = CheckpointOf("unicycle", {{"k_v", 0.95}, {"k_omega", 1.05}});
   Ros2ControlOptions o;
   std::ostringstream out;
   const Status missing = WriteRos2ControlYaml(out, c, "test", o);
@@ -77,7 +77,8 @@ TEST(Ros2Control, UnicycleScalesOnNominalWheels) {
 TEST(Ros2Control, AckermannAndTricycle) {
   std::ostringstream out;
   ASSERT_TRUE(WriteRos2ControlYaml(
-                  out, Estimate("ackermann", {{"r_b", 0.05}, {"l", 0.3}, {"steer_offset", 0.01}}),
+                  out,
+                  CheckpointOf("ackermann", {{"r_b", 0.05}, {"l", 0.3}, {"steer_offset", 0.01}}),
                   "test", {})
                   .ok());
   auto p = Parse(out.str());
@@ -86,7 +87,7 @@ TEST(Ros2Control, AckermannAndTricycle) {
   EXPECT_NE(out.str().find("ackermann_steering_controller:"), std::string::npos);
   EXPECT_NE(out.str().find("steering offset 0.01 rad"), std::string::npos);
 
-  const auto tri = Estimate(
+  const auto tri = CheckpointOf(
       "tricycle", {{"k_steer", 0.001}, {"steer_offset", 0}, {"k_drive", 1e-4}, {"wheelbase", 0.5}});
   std::ostringstream t;
   const Status missing = WriteRos2ControlYaml(t, tri, "test", {});
@@ -103,7 +104,7 @@ TEST(Ros2Control, AckermannAndTricycle) {
 // on the nominal wheels (a realised speed k_v x the command is a radius k_v x nominal), and
 // the steering correction said where the controller has no parameter for it.
 TEST(Ros2Control, BicycleOnItsNominalWheel) {
-  const auto car = Estimate(
+  const auto car = CheckpointOf(
       "bicycle", {{"k_v", 0.95}, {"k_steer", 0.6}, {"steer_offset", 0.02}, {"wheelbase", 0.33}});
   std::ostringstream plain;
   ASSERT_TRUE(WriteRos2ControlYaml(plain, car, "test", {}).ok());
@@ -131,9 +132,9 @@ TEST(Ros2Control, BadOptionsAndUnknownModelsAreErrors) {
   o.controller = "bad name:";
   EXPECT_FALSE(o.IsValid(&why));
   std::ostringstream out;
-  const Status s = WriteRos2ControlYaml(out, Estimate("hovercraft", {{"k", 1}}), "t", {});
+  const Status s = WriteRos2ControlYaml(out, CheckpointOf("hovercraft", {{"k", 1}}), "t", {});
   EXPECT_NE(s.message().find("hovercraft"), std::string::npos);
-  const Status m = WriteRos2ControlYaml(out, Estimate("diffdrive", {{"r_l", 0.03}}), "t", {});
+  const Status m = WriteRos2ControlYaml(out, CheckpointOf("diffdrive", {{"r_l", 0.03}}), "t", {});
   EXPECT_NE(m.message().find("'r_r'"), std::string::npos) << m.message();
 }
 

@@ -18,7 +18,7 @@ Checkpoint Car(double k_v, double k_steer, double offset) {
   return c;
 }
 
-std::map<std::string, double> Parse(const std::string& text) {
+std::map<std::string, double> ParseVesc(const std::string& text) {
   std::map<std::string, double> out;
   std::istringstream in(text);
   std::string line;
@@ -39,7 +39,7 @@ TEST(Vesc, CorrectedGainsMakeTheCarRealiseItsCommands) {
   // realises 0.9 x the speed whose ERPM 4614 x v asks for.
   std::ostringstream out;
   ASSERT_TRUE(WriteVescYaml(out, Car(0.9, 0.6, 0.02), "test", in_use).ok());
-  const auto v = Parse(out.str());
+  const auto v = ParseVesc(out.str());
   for (double cmd : {-0.3, 0.0, 0.1, 0.34}) {
     const double servo =
         v.at("steering_angle_to_servo_gain") * cmd + v.at("steering_angle_to_servo_offset");

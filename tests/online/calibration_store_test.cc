@@ -21,8 +21,8 @@ std::array<double, 2> ControlAt(int64_t i) {
 }
 
 // `seconds` of poses at pose_hz and controls at control_hz, from `start` (pipeline ns).
-void Feed(CalibrationStore* store, TimeNs start, double seconds, double pose_hz, double control_hz,
-          ControlSignal* all_controls = nullptr) {
+void FeedStore(CalibrationStore* store, TimeNs start, double seconds, double pose_hz,
+               double control_hz, ControlSignal* all_controls = nullptr) {
   const auto pose_dt = static_cast<TimeNs>(1e9 / pose_hz);
   const auto control_dt = static_cast<TimeNs>(1e9 / control_hz);
   const TimeNs end = start + SecondsToNs(seconds);
@@ -43,7 +43,7 @@ void Feed(CalibrationStore* store, TimeNs start, double seconds, double pose_hz,
 
 TEST(CalibrationStore, KeepsEverythingBelowCapacity) {
   CalibrationStore store(CalibrationStoreOptions{}, 2);
-  Feed(&store, kOrigin, 60.0, 30.0, 50.0);
+  FeedStore(&store, kOrigin, 60.0, 30.0, 50.0);
   EXPECT_EQ(store.num_poses(), 1800u);
   EXPECT_EQ(store.num_controls(), 3000u);
   EXPECT_EQ(store.level(), 0);
@@ -77,7 +77,7 @@ TEST(CalibrationStore, SixHoursStayWithinTheStatedMemoryAndCoverTheRunEvenly) {
   EXPECT_EQ(store.AllocatedBytes(), stated);
   EXPECT_LT(stated, 30u << 20);  // as docs/daemon.md says: under 30 MiB
   ControlSignal truth(2, kOrigin);
-  Feed(&store, kOrigin, 6 * 3600.0, 30.0, 100.0, &truth);
+  FeedStore(&store, kOrigin, 6 * 3600.0, 30.0, 100.0, &truth);
   EXPECT_EQ(store.AllocatedBytes(), stated);  // never reallocated
   EXPECT_LE(store.num_poses(), static_cast<size_t>(o.max_poses));
   EXPECT_LE(store.num_controls(), static_cast<size_t>(o.max_controls));
@@ -112,9 +112,9 @@ TEST(CalibrationStore, SixHoursStayWithinTheStatedMemoryAndCoverTheRunEvenly) {
 // longer than any prediction window, and the snapshot is one ordered recording.
 TEST(CalibrationStore, ANewTimeBaseGoesOnAfterTheStoredData) {
   CalibrationStore store(CalibrationStoreOptions{}, 2);
-  Feed(&store, kOrigin, 20.0, 30.0, 50.0);
+  FeedStore(&store, kOrigin, 20.0, 30.0, 50.0);
   store.NewBase();
-  Feed(&store, kOrigin - SecondsToNs(3600.0), 20.0, 30.0, 50.0);  // an hour back
+  FeedStore(&store, kOrigin - SecondsToNs(3600.0), 20.0, 30.0, 50.0);  // an hour back
   EXPECT_EQ(store.num_poses(), 1200u);
   const Recording rec = store.Snapshot(kOrigin - SecondsToNs(3600.0) + SecondsToNs(20.0), "t");
   ASSERT_EQ(rec.poses.size(), 1200u);

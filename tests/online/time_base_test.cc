@@ -10,7 +10,7 @@ namespace {
 const TimeNs kGap = SecondsToNs(0.5);
 constexpr TimeNs S(double s) { return static_cast<TimeNs>(s * 1e9); }
 
-ControlSample ControlAt(TimeNs t) {
+ControlSample TimeBaseControlAt(TimeNs t) {
   ControlSample c;
   c.utime = PipelineNsToUtime(t);
   return c;
@@ -67,7 +67,7 @@ TEST(TimeBase, HeldControlJumpIsReleasedOntoTheNewBase) {
   tb.ControlUsed(S(50));
   tb.PoseSeen(S(50));
   ASSERT_TRUE(tb.IsControlJump(S(1)));
-  tb.Hold(ControlAt(S(1)), /*since_mono_ns=*/777);
+  tb.Hold(TimeBaseControlAt(S(1)), /*since_mono_ns=*/777);
   EXPECT_TRUE(tb.holding());
   EXPECT_EQ(tb.held_since_mono_ns(), 777);
   // The poses show the jump: a new base from the poses, then the held control joins it.
@@ -85,7 +85,7 @@ TEST(TimeBase, ControlsAloneStartTheNewBaseAndOldPosesAreDiscarded) {
   TimeBase tb(kGap);
   tb.ControlUsed(S(50));
   tb.PoseSeen(S(50));
-  tb.Hold(ControlAt(S(1)), 0);
+  tb.Hold(TimeBaseControlAt(S(1)), 0);
   // The poses did not follow (the stream ended, or a second passed live).
   tb.StartNew(S(1), TimeBase::Stream::kControls);
   tb.ReleaseHeld();
@@ -106,7 +106,7 @@ TEST(TimeBase, DecisionsDependOnStampsOnly) {
       if (tb.FromOldBase(t, TimeBase::Stream::kControls)) {
         decisions.push_back(0);
       } else if (tb.IsControlJump(t)) {
-        tb.Hold(ControlAt(t), mono);
+        tb.Hold(TimeBaseControlAt(t), mono);
         tb.StartNew(t, TimeBase::Stream::kControls);
         tb.ControlUsed(UtimeToPipelineNs(tb.ReleaseHeld().utime));
         decisions.push_back(1);

@@ -19,15 +19,16 @@
 namespace kincal {
 namespace {
 
-struct Case {
+struct PlanCase {
   System sys;
   Eigen::VectorXd p, prior_sigma;
   PlanOptions o;
 };
 
 // The reference case: lengths to 0.1 %, lag and delay to 3 ms, lever arm to 2 mm.
-Case Reference(double duration_s) {
-  Case c{MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value(), {}, {}, {}};
+PlanCase PlanReference(double duration_s) {
+  PlanCase c{
+      MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value(), {}, {}, {}};
   c.p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
   c.prior_sigma = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05).finished();
   c.o.duration_s = duration_s;
@@ -38,8 +39,8 @@ Case Reference(double duration_s) {
   return c;
 }
 
-Case UnicycleWithLag(double duration_s) {
-  Case u{MakeSystem("unicycle", {"actuator_lag"}).value(), {}, {}, {}};
+PlanCase UnicycleWithLag(double duration_s) {
+  PlanCase u{MakeSystem("unicycle", {"actuator_lag"}).value(), {}, {}, {}};
   u.p = (Eigen::VectorXd(3) << 1.0, 1.0, 0.15).finished();
   u.prior_sigma = (Eigen::VectorXd(3) << 0.1, 0.1, 0.1).finished();
   u.o.duration_s = duration_s;
@@ -49,8 +50,8 @@ Case UnicycleWithLag(double duration_s) {
   return u;
 }
 
-Case Tricycle(double duration_s) {
-  Case t{MakeSystem("tricycle").value(), {}, {}, {}};
+PlanCase Tricycle(double duration_s) {
+  PlanCase t{MakeSystem("tricycle").value(), {}, {}, {}};
   t.p = (Eigen::VectorXd(4) << 0.001, 0.0, 1e-4, 0.5).finished();
   t.prior_sigma = (Eigen::VectorXd(4) << 1e-4, 0.03, 1e-5, 0.05).finished();
   t.o.duration_s = duration_s;
@@ -61,7 +62,7 @@ Case Tricycle(double duration_s) {
 }
 
 // The fastest usual motion that stays in, against the plan: the ratio of their times.
-double SpeedUp(const Case& c, const Workspace& ws, const char* label) {
+double SpeedUp(const PlanCase& c, const Workspace& ws, const char* label) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion plan;
   const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan);
@@ -111,19 +112,19 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
 }
 
 TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
-  const Case c = Reference(30.0);
+  const PlanCase c = PlanReference(30.0);
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
   EXPECT_GE(SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm"), 1.5);
 }
 
 TEST(Plan, UnicycleWithALagAndATricycle) {
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
-  const Case u = UnicycleWithLag(30.0);
+  const PlanCase u = UnicycleWithLag(30.0);
   // Every motion reaches these targets within seconds: planning changes little here, and
   // the greedy plan is within a quarter of the best usual motion (circles each way).
   EXPECT_GE(SpeedUp(u, *ws, "unicycle + lag"), 0.75);
 
-  const Case t = Tricycle(30.0);
+  const PlanCase t = Tricycle(30.0);
   // Its tightest turn (0.66 m at 0.7 rad of steering) needs a larger floor for the
   // usual motions to fit.
   EXPECT_GE(SpeedUp(t, *MakeArena(-3.0, -2.0, 3.0, 2.0), "tricycle"), 1.0);
@@ -133,7 +134,7 @@ TEST(Plan, UnicycleWithALagAndATricycle) {
 // plan: the target never leaves the camera's view. The workspace is a real camera's view:
 // the shipped simulated camera (640x480, f 500 px, 2 m up), markers 10 px inside.
 TEST(Plan, EveryRobotWithinThePriorStaysInView) {
-  Case c = Reference(20.0);
+  PlanCase c = PlanReference(20.0);
   vision::CameraModel cam;
   cam.width = 640;
   cam.height = 480;
@@ -207,7 +208,7 @@ struct ErrorTally {
 // Batch fits of simulated runs of the plan (truth drawn near the design point, Gaussian
 // poses): each parameter's error spread is its predicted sigma within 35 %, pooled within
 // 20 %, and the errors lie inside 3 sigma.
-void ExpectPredictedSigmaGaussian(const Case& c, int trials, uint64_t seed, const char* label) {
+void ExpectPredictedSigmaGaussian(const PlanCase& c, int trials, uint64_t seed, const char* label) {
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion plan;
@@ -249,7 +250,7 @@ void ExpectPredictedSigmaGaussian(const Case& c, int trials, uint64_t seed, cons
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigma) {
-  ExpectPredictedSigmaGaussian(Reference(15.0), 40, 8, "diffdrive + lag, delay, lever arm");
+  ExpectPredictedSigmaGaussian(PlanReference(15.0), 40, 8, "diffdrive + lag, delay, lever arm");
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaForAUnicycleAndATricycle) {
@@ -294,7 +295,7 @@ Eigen::Vector3d MeasuredPoseSigma(PixelPoseMeter& meter, std::mt19937_64& rng) {
 // camera's view for the pose noise across it, its sigma predicted with the noise along its
 // path. Over `trials` batch fits (each frame weighted by its pose covariance) the errors'
 // spread is the predicted sigma within 20 % (pooled) and they lie inside 3 sigma.
-void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const char* label) {
+void ExpectPredictedSigmaThroughPixels(PlanCase c, int trials, uint64_t seed, const char* label) {
   const ThesisVision v = test_util::ShippedCamera();
   std::mt19937_64 rng(seed);
   PixelPoseOptions po;
@@ -366,7 +367,7 @@ void ExpectPredictedSigmaThroughPixels(Case c, int trials, uint64_t seed, const 
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixels) {
-  Case c = Reference(10.0);
+  PlanCase c = PlanReference(10.0);
   c.o.max_abs = {12.0, 12.0};
   ExpectPredictedSigmaThroughPixels(c, 24, 12, "diffdrive + lag, delay, lever arm");
 }
@@ -380,7 +381,7 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForATricycle) {
 }
 
 TEST(Plan, OptionsAreCheckedAndNamed) {
-  const Case c = Reference(10.0);
+  const PlanCase c = PlanReference(10.0);
   std::string error;
   EXPECT_TRUE(c.o.IsValid(c.sys, &error)) << error;
   PlanOptions o = c.o;

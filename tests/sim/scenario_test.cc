@@ -15,7 +15,7 @@ namespace {
 
 std::string Source(const std::string& rel) { return ::kincal::testing::SourceDir() + "/" + rel; }
 
-std::string LoadError(const std::string& path) {
+std::string ScenarioLoadError(const std::string& path) {
   const StatusOr<Scenario> s = LoadScenario(path);
   return s.ok() ? std::string("no error") : s.status().message();
 }
@@ -29,14 +29,14 @@ TEST(Scenario, ShippedExampleLoads) {
 }
 
 TEST(Scenario, UnknownKeyIsNamedWithFileAndLine) {
-  const std::string e = LoadError(Source("tests/data/bad_scenario.yaml"));
+  const std::string e = ScenarioLoadError(Source("tests/data/bad_scenario.yaml"));
   EXPECT_NE(e.find("bad_scenario.yaml:3: unknown key 'wheel_radius'"), std::string::npos) << e;
 }
 
 TEST(Scenario, NegativeDurationIsRejected) {
   const auto path = std::filesystem::temp_directory_path() / "kincal_scenario_duration.yaml";
   std::ofstream(path) << "model: unicycle\nduration_s: -5\n";
-  const std::string e = LoadError(path.string());
+  const std::string e = ScenarioLoadError(path.string());
   std::filesystem::remove(path);
   EXPECT_NE(e.find("duration_s"), std::string::npos) << e;
 }

@@ -13,7 +13,7 @@ namespace kincal::vision {
 namespace {
 
 // A floor of `floor` grey with Gaussian noise and dark disks of `marker` grey.
-cv::Mat Scene(int w, int h, double floor, double marker, double noise, uint64_t seed) {
+cv::Mat ThresholdScene(int w, int h, double floor, double marker, double noise, uint64_t seed) {
   cv::Mat img(h, w, CV_8UC1);
   std::mt19937_64 rng(seed);
   std::normal_distribution<double> g(0.0, noise);
@@ -27,7 +27,7 @@ cv::Mat Scene(int w, int h, double floor, double marker, double noise, uint64_t 
 }
 
 TEST(Threshold, OtsuSplitsMarkersFromTheFloor) {
-  const cv::Mat img = Scene(160, 120, 180, 40, 2.0, 1);
+  const cv::Mat img = ThresholdScene(160, 120, 180, 40, 2.0, 1);
   // Foreground is p <= thr: every marker pixel (40) in, every floor pixel (180 +- 3 sigma)
   // out.
   const int thr = OtsuThreshold(img, 10);
@@ -42,7 +42,7 @@ TEST(Threshold, OtsuSplitsMarkersFromTheFloor) {
 }
 
 TEST(Threshold, NoiseAloneHasNoThreshold) {
-  const cv::Mat img = Scene(160, 120, 128, 128, 2.0, 2);  // "markers" at the floor's level
+  const cv::Mat img = ThresholdScene(160, 120, 128, 128, 2.0, 2);  // "markers" at the floor's level
   EXPECT_EQ(OtsuThreshold(img, 10), -1);
   EXPECT_EQ(FlatThreshold(img, true, 10), -1);
 }
