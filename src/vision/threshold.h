@@ -3,6 +3,7 @@
 // Otsu's. Private to the vision layer.
 #pragma once
 
+#include <cstdint>
 #include <opencv2/core.hpp>
 
 namespace kincal::vision {
@@ -14,6 +15,11 @@ inline constexpr int kFlattenMinArea = 320 * 240;
 // divided out: out = 200 * view / background for dark markers, or view - background + 55
 // for bright markers on a dark floor (a dark floor's level is mostly offset).
 void FlattenBackground(const cv::Mat& view, bool dark_on_light, int tile, cv::Mat* out);
+
+// One row of FlattenBackground's division (or subtraction): out[x] from in[x] and the
+// background level b[x], for x < n. Eight pixels at a time with SSE2, to the same bits as
+// the scalar formula above (rounded to nearest even, saturated).
+void FlattenRow(const uint8_t* in, const float* b, int n, bool dark_on_light, uint8_t* out);
 
 // The threshold of a flattened view: half way between the floor (the median) and the
 // darkest (brightest) 10^-4 of the pixels; -1 when they differ by less than twice

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <vector>
 
 namespace kincal::vision {
 namespace {
@@ -45,6 +47,51 @@ TEST(Threshold, NoiseAloneHasNoThreshold) {
   const cv::Mat img = ThresholdScene(160, 120, 128, 128, 2.0, 2);  // "markers" at the floor's level
   EXPECT_EQ(OtsuThreshold(img, 10), -1);
   EXPECT_EQ(FlatThreshold(img, true, 10), -1);
+}
+
+// The row division's vector path gives the scalar formula's bytes exactly (the golden
+// replay depends on them): every length up to 40 (the tail after the last eight), random
+// levels, levels below 1, and exact halves that round to even.
+TEST(Threshold, FlattenRowIsTheScalarFormulaToTheBit) {
+  std::mt19937_64 rng(5);
+  std::uniform_int_distribution<int> grey(0, 255);
+  std::uniform_real_distribution<float> level(0.0f, 300.0f);
+  auto reference = [](uint8_t in, float b, bool dark) {
+    // FlattenBackground's formula, written out: 200 in / max(b, 1), or in - b + 55.
+    const double v = dark ? 200.0 * in / static_cast<double>(std::max(b, 1.0f))
+                          : static_cast<double>(static_cast<float>(in) - b) + 55.0;
+    return static_cast<uint8_t>(std::clamp(static_cast<int>(std::nearbyint(v)), 0, 255));
+  };
+  int halves = 0;
+  for (bool dark : {true, false}) {
+    for (int n = 0; n <= 40; ++n) {
+      for (int trial = 0; trial < 50; ++trial) {
+        std::vector<uint8_t> in(static_cast<size_t>(n)), out(static_cast<size_t>(n) + 1, 7);
+        std::vector<float> b(static_cast<size_t>(n));
+        for (int x = 0; x < n; ++x) {
+          const auto i = static_cast<size_t>(x);
+          in[i] = static_cast<uint8_t>(grey(rng));
+          switch (trial % 4) {
+            case 0: b[i] = level(rng); break;
+            case 1: b[i] = level(rng) / 300.0f; break;  // below 1: the guard
+            case 2: b[i] = dark ? 80.0f : 0.5f; break;  // 200 in / 80 and in - 0.5: halves
+            default: b[i] = static_cast<float>(grey(rng)); break;
+          }
+          const double v = dark ? 200.0 * in[i] / std::max(b[i], 1.0f) : in[i] - b[i] + 55.0;
+          halves += v - std::floor(v) == 0.5 ? 1 : 0;
+        }
+        FlattenRow(in.data(), b.data(), n, dark, out.data());
+        for (int x = 0; x < n; ++x) {
+          const auto i = static_cast<size_t>(x);
+          ASSERT_EQ(int{out[i]}, int{reference(in[i], b[i], dark)})
+              << (dark ? "dark" : "bright") << " n " << n << " x " << x << " in " << int{in[i]}
+              << " b " << b[i];
+        }
+        EXPECT_EQ(out[static_cast<size_t>(n)], 7) << "wrote past the row";
+      }
+    }
+  }
+  EXPECT_GT(halves, 1000) << "the exact halves were not exercised";
 }
 
 TEST(Threshold, FlatteningLevelsAnUnevenFloor) {
