@@ -65,9 +65,8 @@ __m128i FlattenDark4(__m128i in4, const float* b) {
   const __m128 level = _mm_max_ps(_mm_loadu_ps(b), _mm_set1_ps(1.0f));
   const __m128d scale = _mm_set1_pd(kFlatLevel);
   const __m128d lo = _mm_div_pd(_mm_mul_pd(scale, _mm_cvtepi32_pd(in4)), _mm_cvtps_pd(level));
-  const __m128d hi =
-      _mm_div_pd(_mm_mul_pd(scale, _mm_cvtepi32_pd(_mm_unpackhi_epi64(in4, in4))),
-                 _mm_cvtps_pd(_mm_movehl_ps(level, level)));
+  const __m128d hi = _mm_div_pd(_mm_mul_pd(scale, _mm_cvtepi32_pd(_mm_unpackhi_epi64(in4, in4))),
+                                _mm_cvtps_pd(_mm_movehl_ps(level, level)));
   return ToInt4(lo, hi);
 }
 
@@ -138,9 +137,8 @@ void FlattenRow(const uint8_t* in, const float* b, int n, bool dark_on_light, ui
   }
 #endif
   for (; x < n; ++x) {
-    out[x] = dark_on_light
-                 ? cv::saturate_cast<uint8_t>(kFlatLevel * in[x] / std::max(b[x], 1.0f))
-                 : cv::saturate_cast<uint8_t>(in[x] - b[x] + (255.0 - kFlatLevel));
+    out[x] = dark_on_light ? cv::saturate_cast<uint8_t>(kFlatLevel * in[x] / std::max(b[x], 1.0f))
+                           : cv::saturate_cast<uint8_t>(in[x] - b[x] + (255.0 - kFlatLevel));
   }
 }
 

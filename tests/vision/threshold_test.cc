@@ -72,10 +72,18 @@ TEST(Threshold, FlattenRowIsTheScalarFormulaToTheBit) {
           const auto i = static_cast<size_t>(x);
           in[i] = static_cast<uint8_t>(grey(rng));
           switch (trial % 4) {
-            case 0: b[i] = level(rng); break;
-            case 1: b[i] = level(rng) / 300.0f; break;  // below 1: the guard
-            case 2: b[i] = dark ? 80.0f : 0.5f; break;  // 200 in / 80 and in - 0.5: halves
-            default: b[i] = static_cast<float>(grey(rng)); break;
+            case 0:
+              b[i] = level(rng);
+              break;
+            case 1:
+              b[i] = level(rng) / 300.0f;
+              break;  // below 1: the guard
+            case 2:
+              b[i] = dark ? 80.0f : 0.5f;
+              break;  // 200 in / 80 and in - 0.5: halves
+            default:
+              b[i] = static_cast<float>(grey(rng));
+              break;
           }
           const double v = dark ? 200.0 * in[i] / std::max(b[i], 1.0f) : in[i] - b[i] + 55.0;
           halves += v - std::floor(v) == 0.5 ? 1 : 0;
