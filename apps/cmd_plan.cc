@@ -195,9 +195,9 @@ int Run(const PlanArgs& a) {
   const auto ws = WorkspaceFrom(a);
   std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";
   Motion plan;
-  if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan); !s.ok())
+  std::vector<Motion> usual;
+  if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan, &usual); !s.ok())
     throw std::runtime_error(s.message());
-  std::vector<Motion> usual = UsualMotions(*sys, p, prior, *ws, o);
   PrintPlanSummary(*sys, o, plan, usual, std::cout);
   if (const Status s = WritePlanFiles(a.out, *sys, p, prior, o, plan, usual); !s.ok()) {
     throw std::runtime_error(s.message());

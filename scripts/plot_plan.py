@@ -40,6 +40,10 @@ def main() -> int:
             sig = [s[i] for s in m["sigma"]]
             style = dict(lw=2.4, color="black") if k == 0 else dict(lw=1.2, alpha=0.85)
             label = m["name"] + ("" if m.get("stays_in", True) else " (leaves view)")
+            if m.get("stays_in", True) and not m.get("every_robot_stays_in", True):
+                # Safe at the design point only: dotted, as the plan could not drive it.
+                label += " (a robot within the prior leaves)"
+                style["ls"] = ":"
             ax.plot(m["t_s"], sig, label=label, **style)
         if targets[i] > 0:
             ax.axhline(targets[i], color="red", ls="--", lw=1, label="target")

@@ -62,6 +62,7 @@ Status DriveLink::Plan(const Checkpoint& estimate, const Eigen::Vector3d& pose,
   g.options.duration_s = opt_.horizon_s;
   g.options.control_rate_hz = control_rate_hz;
   g.options.start = pose;
+  g.options.seed_with_usual = false;  // a leg every few seconds: the greedy design alone
   Motion plan;
   const Status s = PlanMotion(*g.sys, g.params, estimate.covariance, *view_, g.options, &plan);
   if (!s.ok()) return s;

@@ -69,7 +69,8 @@ double TimeToTargets(const System& sys, const Eigen::VectorXd& p, Eigen::MatrixX
   if (o.targets.size() == 0) return std::numeric_limits<double>::quiet_NaN();
   const auto floor = MakeArena(-1e4, -1e4, 1e4, 1e4);
   o.duration_s = kPredictChunkS;
-  o.prior_sigmas = 0.0;  // nothing to keep in view on an open floor
+  o.prior_sigmas = 0.0;       // nothing to keep in view on an open floor
+  o.seed_with_usual = false;  // "greedy plans", as the advice says
   for (double done = 0.0; done < kMaxPredictS; done += kPredictChunkS) {
     Motion m;
     if (!PlanMotion(sys, p, cov, *floor, o, &m).ok()) break;

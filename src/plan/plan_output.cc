@@ -28,6 +28,7 @@ nlohmann::json CurveJson(const Motion& m) {
                               : nlohmann::json();
   j["extrapolated"] = m.curve.extrapolated;
   j["stays_in"] = m.stays_in;
+  j["every_robot_stays_in"] = m.every_robot_stays_in;
   j["left_at_s"] = m.left_at_s;
   j["segments"] = m.segment_starts_s.size();
   std::vector<std::vector<double>> path;
@@ -91,16 +92,19 @@ void PrintPlanSummary(const System& sys, const PlanOptions& o, const Motion& pla
                       const std::vector<Motion>& usual, std::ostream& out) {
   out << "predicted sigma after " << o.duration_s << " s";
   if (o.targets.size() > 0) out << " and time to the targets";
+  std::vector<const Motion*> all = {&plan};
+  for (const auto& m : usual) all.push_back(&m);
   // Columns as wide as the longest parameter name, and a space between them.
   int width = 12;
   for (const auto& p : sys.params()) width = std::max(width, static_cast<int>(p.name.size()) + 1);
-  out << ":\n" << std::left << std::setw(18) << "motion";
+  int name_width = 18;
+  for (const Motion* m : all)
+    name_width = std::max(name_width, static_cast<int>(m->name.size()) + 2);
+  out << ":\n" << std::left << std::setw(name_width) << "motion";
   for (const auto& p : sys.params()) out << std::setw(width) << p.name;
   out << "time to target\n";
-  std::vector<const Motion*> all = {&plan};
-  for (const auto& m : usual) all.push_back(&m);
   for (const Motion* m : all) {
-    out << std::setw(18) << m->name;
+    out << std::setw(name_width) << m->name;
     for (int i = 0; i < sys.num_params(); ++i)
       out << std::setw(width) << std::setprecision(3) << m->curve.sigma.back()[i];
     if (std::isfinite(m->curve.time_to_target_s)) {
@@ -109,7 +113,11 @@ void PrintPlanSummary(const System& sys, const PlanOptions& o, const Motion& pla
     } else {
       out << "-";
     }
-    if (!m->stays_in) out << "  leaves the workspace at " << m->left_at_s << " s";
+    if (!m->stays_in) {
+      out << "  leaves the workspace at " << m->left_at_s << " s";
+    } else if (!m->every_robot_stays_in) {
+      out << "  leaves the workspace for a robot within the prior";
+    }
     out << "\n";
   }
 }

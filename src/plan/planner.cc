@@ -124,9 +124,62 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
   return Trial{score, std::move(u), at, std::move(info)};
 }
 
+// The fleet at the start pose, at rest.
+Fleet FleetAtStart(const System& sys, const Eigen::VectorXd& params,
+                   const Eigen::MatrixXd& prior_cov, const Eigen::Vector3d& start,
+                   const PlanOptions& o, const ControlSignal& u) {
+  Fleet fleet;
+  for (const auto& p : RobotsWithinPrior(params, prior_cov, o.prior_sigmas)) {
+    fleet.x.push_back(sys.MakeState(start.x(), start.y(), start.z(), p, u, 0.0));
+  }
+  return fleet;
+}
+
 }  // namespace
 
+bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
+                       const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                       const ControlSignal& u) {
+  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
+  const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
+  for (double t = 0.0;; t = std::min(end_s, t + kCheckS)) {
+    for (auto& x : fleet.x) {
+      if (t > fleet.t_s) {
+        sys.Propagate(x.data(), x.data(), fleet.t_s, t, u, static_cast<const double*>(nullptr));
+      }
+      Eigen::Vector3d z;
+      sys.Measure(x.data(), z.data());
+      if (!ws.Contains(z)) return false;
+    }
+    fleet.t_s = t;
+    if (t >= end_s) return true;
+  }
+}
+
 namespace {
+
+// The greedy plan, or the best continuous usual motion (one segment: the thesis's runs
+// carry the robot back between runs) that keeps every robot within the prior inside
+// (UsualMotions checked it), whichever ranks better. `usual` receives the usual motions.
+void KeepTheBetter(const System& sys, const Eigen::VectorXd& params,
+                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                   Motion* plan, std::vector<Motion>* usual) {
+  *usual = UsualMotions(sys, params, prior_cov, ws, o);
+  const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
+  double best = MotionRank(*plan, o, prior_sigma);
+  const Motion* better = nullptr;
+  for (const Motion& m : *usual) {
+    if (m.segment_starts_s.size() != 1 || !m.stays_in || !m.every_robot_stays_in) continue;
+    const double rank = MotionRank(m, o, prior_sigma);
+    if (rank < best) {
+      best = rank;
+      better = &m;
+    }
+  }
+  if (better == nullptr) return;
+  *plan = *better;
+  plan->name = "plan: " + better->name;
+}
 
 // PlanOptions::IsValid by group: the timing, the control limits, the design.
 bool ValidTiming(const PlanOptions& o, std::string* error) {
@@ -327,7 +380,7 @@ double DesignScore(const Eigen::MatrixXd& cov, const Eigen::VectorXd& prior_sigm
 
 Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
-                  Motion* plan) {
+                  Motion* plan, std::vector<Motion>* usual) {
   std::string error;
   if (!o.IsValid(sys, &error)) return Status::Error("plan: " + error);
   const Eigen::Vector3d start = StartPose(ws, o);
@@ -336,17 +389,22 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   plan->segment_starts_s = {0.0};
   DesignInformation info(sys, params, prior_cov, o.info);
   info.StartSegment(start, 0.0, plan->controls);
-  Fleet fleet;
-  for (const auto& p : RobotsWithinPrior(params, prior_cov, o.prior_sigmas)) {
-    fleet.x.push_back(sys.MakeState(start.x(), start.y(), start.z(), p, plan->controls, 0.0));
-  }
+  Fleet fleet = FleetAtStart(sys, params, prior_cov, start, o, plan->controls);
   if (!ws.Contains(info.MeasuredPose())) {
     return Status::Error("plan: the target at the start pose is outside the " + ws.Describe());
   }
   const std::vector<Values> grid = CandidateControls(sys, params, o);
   const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
   Values now{};
-  const int segments = static_cast<int>(std::ceil(o.duration_s / o.segment_s - 1e-9));
+  // Whole segments, then the stop: at rest by duration_s whatever the last segment drove.
+  const double stop_s = plan_internal::LongestStopSeconds(o, sys.num_controls());
+  const int segments = static_cast<int>(std::floor((o.duration_s - stop_s) / o.segment_s + 1e-9));
+  if (segments < 1) {
+    return Status::Error("plan: a duration of " + std::to_string(o.duration_s) +
+                         " s leaves no segment of " + std::to_string(o.segment_s) +
+                         " s before the stop (" + std::to_string(stop_s) +
+                         " s from the speed limits at the acceleration limits)");
+  }
   for (int s = 0; s < segments; ++s) {
     const double t0 = s * o.segment_s;
     std::optional<Trial> best;
@@ -369,8 +427,13 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
                false, &fleet);
   }
-  plan_internal::AppendStop(&plan->controls, segments * o.segment_s, o, &now);
+  const double rest_s = plan_internal::AppendStop(&plan->controls, segments * o.segment_s, o, &now);
+  if (rest_s < o.duration_s - 1e-9) plan_internal::AppendRest(&plan->controls, o.duration_s);
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
+  if (o.seed_with_usual) {
+    std::vector<Motion> compared;
+    KeepTheBetter(sys, params, prior_cov, ws, o, plan, usual != nullptr ? usual : &compared);
+  }
   return Status{};
 }
 

@@ -59,6 +59,15 @@ double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Valu
   return rest_s;
 }
 
+double LongestStopSeconds(const PlanOptions& o, int num_channels) {
+  Values limit{};
+  for (size_t i = 0; i < static_cast<size_t>(num_channels) && i < o.max_abs.size(); ++i) {
+    limit[i] = o.max_abs[i];
+  }
+  const double dt = 1.0 / o.control_rate_hz;
+  return dt * std::ceil(RampSeconds(limit, Values{}, num_channels, o) / dt - 1e-9);
+}
+
 Eigen::Vector2d TwistOf(const System& sys, const Eigen::VectorXd& params, const Values& u) {
   const Twist<double> tw = sys.model().BodyTwist(params.data(), u.data());
   return {tw.vx, tw.omega};

@@ -26,6 +26,11 @@ void AppendRest(ControlSignal* signal, double t_s);
 // sample at rest; *u ends at zero. Returns the time of the rest sample.
 double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u);
 
+// The longest stop AppendStop can need: every channel from its limit to zero, rounded up to
+// the control rate. A motion that must be at rest by duration_s stops driving this long
+// before it.
+double LongestStopSeconds(const PlanOptions& o, int num_channels);
+
 // Controls within the limits whose body twist at `params` is (v, omega) as nearly as the
 // limits allow (least squares, Levenberg-Marquardt from a forward guess). Returns whether
 // the twist is reached to 1e-6 of its size.

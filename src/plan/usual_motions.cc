@@ -1,9 +1,13 @@
 // The motions people calibrate with today, drawn to the workspace and the limits, and the
 // evaluation every motion (the plan too) gets.
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
+#include <string>
+#include <utility>
 
 #include "kincal/plan/planner.h"
 #include "kincal/sim/thesis.h"
@@ -47,18 +51,21 @@ bool Drivable(const System& sys, const Eigen::VectorXd& p, const PlanOptions& ti
 
 // Fastest forward speed whose controls (and those of turning at radius r) fit within the
 // headroom of the limits.
-double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
-                   double radius) {
-  const PlanOptions tight = WithHeadroom(o);
+double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o, double radius,
+                   double headroom = kHeadroom) {
+  PlanOptions tight = o;
+  for (double& m : tight.max_abs) m *= headroom;
   return LargestFitting(0.0, 10.0, 50, [&](double v) {
     return Drivable(sys, p, tight, v, radius > 0.0 ? v / radius : 0.0);
   });
 }
 
 // Fastest turn in place within the headroom, 0 when the robot cannot turn in place.
-double SpinRate(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o) {
+double SpinRate(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                double headroom = kHeadroom) {
   if (o.max_curvature > 0.0) return 0.0;
-  const PlanOptions tight = WithHeadroom(o);
+  PlanOptions tight = o;
+  for (double& m : tight.max_abs) m *= headroom;
   const double w =
       LargestFitting(0.0, 50.0, 50, [&](double w) { return Drivable(sys, p, tight, 0.0, w); });
   return w > 1e-3 ? w : 0.0;
@@ -85,14 +92,18 @@ Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions
   m.segment_starts_s = {0.0};
   Values now{};
   double t = 0.0;
-  for (size_t k = 0; t < o.duration_s - 1e-9; k = (k + 1) % pieces.size()) {
+  // Like the plan, at rest by duration_s: driving ends a stop from the limits before it.
+  const double drive_s =
+      std::max(0.0, o.duration_s - plan_internal::LongestStopSeconds(o, sys.num_controls()));
+  for (size_t k = 0; t < drive_s - 1e-9; k = (k + 1) % pieces.size()) {
     Values to{};
     plan_internal::TwistToControls(sys, p, pieces[k].v, pieces[k].omega, o, &to);
-    const double t1 = std::min(o.duration_s, t + pieces[k].seconds);
+    const double t1 = std::min(drive_s, t + pieces[k].seconds);
     plan_internal::AppendSlewed(&m.controls, t, t1, to, o, &now);
     t = t1;
   }
-  plan_internal::AppendRest(&m.controls, o.duration_s);
+  const double rest_s = plan_internal::AppendStop(&m.controls, t, o, &now);
+  if (rest_s < o.duration_s - 1e-9) plan_internal::AppendRest(&m.controls, o.duration_s);
   return m;
 }
 
@@ -180,41 +191,146 @@ double TimeToTarget(const SigmaCurve& c, const Eigen::VectorXd& targets, const P
   return c.t_s.back() * worst;
 }
 
+// How each family is tried: sizes as fractions of the workspace's size (a square's side,
+// a circle's radius), speeds as fractions of the fastest the size allows within the
+// limits (all of them: the plan may use all of them too).
+constexpr std::array<double, 5> kSquareSides = {0.2, 0.3, 0.4, 0.5, 0.6};
+constexpr std::array<double, 6> kRadii = {0.08, 0.12, 0.16, 0.2, 0.25, 0.3};
+constexpr std::array<double, 4> kSpeeds = {0.4, 0.6, 0.8, 1.0};
+
+struct Family {
+  const System& sys;
+  const Eigen::VectorXd& p;
+  const PlanOptions& o;
+  double size, min_radius, spin;
+  double drive_s;  // driving time: the duration less a stop from the limits
+};
+
+std::string Described(const std::string& family, const std::string& size, double v) {
+  char text[96];
+  std::snprintf(text, sizeof(text), "%s (%s, %.2f m/s)", family.c_str(), size.c_str(), v);
+  return text;
+}
+
+std::string Metres(const char* what, double x) {
+  char text[48];
+  std::snprintf(text, sizeof(text), "%s %.2f m", what, x);
+  return text;
+}
+
+std::vector<Motion> Squares(const Family& f) {
+  std::vector<Motion> out;
+  const double r = std::max(f.min_radius, 0.1 * f.size);  // a steered robot's corners
+  const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : r, 1.0);
+  for (double side : kSquareSides) {
+    for (double k : kSpeeds) {
+      const double v = k * fastest;
+      out.push_back(FromPieces(f.sys, f.p, f.o,
+                               Described("square", Metres("side", side * f.size), v),
+                               Square(f.sys, f.p, f.o, side * f.size, v, k * f.spin, r)));
+    }
+  }
+  return out;
+}
+
+// Circles of each radius (the smallest the robot can turn at least), `loops` laps each way
+// in turn: one lap each way a figure-eight, half the time each way a circle each way.
+std::vector<Motion> Loops(const Family& f, const std::string& name, bool figure_eight) {
+  std::vector<Motion> out;
+  double last_r = -1.0;
+  for (double q : kRadii) {
+    const double r = std::max(f.min_radius, q * f.size);
+    if (r == last_r) continue;  // several sizes below the tightest turn
+    last_r = r;
+    const double fastest = CruiseSpeed(f.sys, f.p, f.o, r, 1.0);
+    for (double k : kSpeeds) {
+      const double v = k * fastest;
+      const double loop = 2.0 * std::numbers::pi * r / v;
+      if (2.0 * loop > f.drive_s) continue;  // not a full turn each way in the time
+      const int laps = figure_eight ? 1 : std::max(1, static_cast<int>(0.5 * f.drive_s / loop));
+      out.push_back(FromPieces(f.sys, f.p, f.o, Described(name, Metres("radius", r), v),
+                               {{v, v / r, laps * loop}, {v, -v / r, laps * loop}}));
+    }
+  }
+  return out;
+}
+
+std::vector<Motion> Circles(const Family& f) { return Loops(f, "circle each way", false); }
+std::vector<Motion> FigureEights(const Family& f) { return Loops(f, "figure-eight", true); }
+
+// Every candidate evaluated. The best (MotionRank) that keeps every robot within the prior
+// inside; and before it, when better, the best at the design point (which then leaves for
+// some robot within the prior: every_robot_stays_in false). When none stays in even at
+// the design point, the best of all.
+std::vector<Motion> BestOf(std::vector<Motion> candidates, const System& sys,
+                           const Eigen::VectorXd& params, const Eigen::MatrixXd& prior_cov,
+                           const Workspace& ws, const PlanOptions& o) {
+  if (candidates.empty()) return {};
+  const Eigen::VectorXd prior_sigma = prior_cov.diagonal().cwiseSqrt();
+  std::vector<std::pair<double, size_t>> order;  // (rank, index), those that stay in first
+  for (size_t k = 0; k < candidates.size(); ++k) {
+    Motion& m = candidates[k];
+    EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &m);
+    const double penalty = m.stays_in ? 0.0 : std::numeric_limits<double>::max();
+    order.emplace_back(std::max(MotionRank(m, o, prior_sigma), penalty), k);
+  }
+  std::stable_sort(order.begin(), order.end());
+  std::vector<Motion> out;
+  for (const auto& [rank, k] : order) {
+    Motion& m = candidates[k];
+    if (!m.stays_in) break;
+    if (EveryRobotStaysIn(sys, params, prior_cov, ws, o, m.controls)) {
+      out.push_back(std::move(m));
+      break;
+    }
+    m.every_robot_stays_in = false;
+    if (out.empty()) out.push_back(m);
+  }
+  if (out.empty()) {
+    out.push_back(std::move(candidates[order.front().second]));
+    out.back().every_robot_stays_in = false;
+  }
+  return out;
+}
+
 }  // namespace
+
+double MotionRank(const Motion& m, const PlanOptions& o, const Eigen::VectorXd& prior_sigma) {
+  if (std::isfinite(m.curve.time_to_target_s)) return m.curve.time_to_target_s;
+  if (m.curve.sigma.empty()) return std::numeric_limits<double>::infinity();
+  double left = 0.0;
+  for (int i : ScoredParams(o, static_cast<int>(prior_sigma.size()))) {
+    left += std::pow(m.curve.sigma.back()[i] / prior_sigma[i], 2);
+  }
+  return left;
+}
 
 std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& params,
                                  const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                  const PlanOptions& o) {
-  const double size = ws.Size();
-  const double spin = SpinRate(sys, params, o);
   const double min_radius =
       std::max(o.max_curvature > 0.0 ? 1.0 / o.max_curvature : 0.0,
                MinTurnRadius(sys, params, o, CruiseSpeed(sys, params, o, 0.0)));
+  const Family f{sys,
+                 params,
+                 o,
+                 ws.Size(),
+                 min_radius,
+                 SpinRate(sys, params, o, 1.0),
+                 o.duration_s - plan_internal::LongestStopSeconds(o, sys.num_controls())};
   std::vector<Motion> out;
-  // Drawn from the start at the workspace's centre, heading +x: each shape lies within
-  // 0.4 of the workspace's width of it (the square on one side, the circles above and
-  // below), leaving room for a lag's overshoot.
-  {
-    const double side = 0.4 * size, r = std::max(min_radius, 0.1 * size);
-    const double v = CruiseSpeed(sys, params, o, spin > 0.0 ? 0.0 : r);
-    out.push_back(FromPieces(sys, params, o, "square", Square(sys, params, o, side, v, spin, r)));
-  }
-  {
-    const double r = std::max(min_radius, 0.2 * size), v = CruiseSpeed(sys, params, o, r);
-    const double loop = 2.0 * std::numbers::pi * r / v;
-    const int laps = std::max(1, static_cast<int>(0.5 * o.duration_s / loop));
-    out.push_back(FromPieces(sys, params, o, "circle each way",
-                             {{v, v / r, laps * loop}, {v, -v / r, laps * loop}}));
-  }
-  {
-    const double r = std::max(min_radius, 0.15 * size), v = CruiseSpeed(sys, params, o, r);
-    const double loop = 2.0 * std::numbers::pi * r / v;
-    out.push_back(
-        FromPieces(sys, params, o, "figure-eight", {{v, v / r, loop}, {v, -v / r, loop}}));
+  // Each family at every size and speed of its grid (drawn from the start at the
+  // workspace's centre, heading +x), the best that stays in kept.
+  for (auto candidates : {Squares(f), Circles(f), FigureEights(f)}) {
+    for (Motion& m : BestOf(std::move(candidates), sys, params, prior_cov, ws, o)) {
+      out.push_back(std::move(m));
+    }
   }
   Motion runs = ThesisRuns(sys, params, o, min_radius);
-  if (!runs.segment_starts_s.empty()) out.push_back(std::move(runs));
-  for (auto& m : out) EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &m);
+  if (!runs.segment_starts_s.empty()) {
+    EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &runs);
+    out.push_back(std::move(runs));
+  }
   return out;
 }
 

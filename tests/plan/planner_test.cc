@@ -61,30 +61,43 @@ PlanCase Tricycle(double duration_s) {
   return t;
 }
 
-// The fastest usual motion that stays in, against the plan: the ratio of their times.
-double SpeedUp(const PlanCase& c, const Workspace& ws, const char* label) {
+// The plan against the fastest usual motion: the ratio of their times to the targets.
+// `admissible` against those that keep every robot within the prior inside, as the plan
+// does (0 when none does); `nominal` against those that stay in at the design point.
+struct SpeedUps {
+  double admissible = 0.0, nominal = 0.0;
+};
+
+SpeedUps SpeedUp(const PlanCase& c, const Workspace& ws, const char* label) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion plan;
-  const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan);
+  std::vector<Motion> usual;
+  const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan, &usual);
   EXPECT_TRUE(s.ok()) << s.message();
   EXPECT_TRUE(plan.stays_in);
-  double best = 1e300;
-  std::string best_name;
-  for (const Motion& m : UsualMotions(c.sys, c.p, prior, ws, c.o)) {
-    std::cout << label << ": " << m.name << " " << m.curve.time_to_target_s << " s"
-              << (m.stays_in ? "" : " (leaves)") << "\n";
-    if (m.stays_in && m.curve.time_to_target_s < best) {
-      best = m.curve.time_to_target_s;
-      best_name = m.name;
-    }
-  }
-  std::cout << label << ": plan " << plan.curve.time_to_target_s << " s, best usual (" << best_name
-            << ") " << best << " s: " << best / plan.curve.time_to_target_s << " x\n";
+  EXPECT_TRUE(EveryRobotStaysIn(c.sys, c.p, prior, ws, c.o, plan.controls)) << label;
   EXPECT_FALSE(plan.curve.extrapolated);
-  // Issue 34: with no usual motion inside, the ratio against 1e300 passed any bound.
-  EXPECT_FALSE(best_name.empty()) << label << ": no usual motion stays inside the arena";
-  if (best_name.empty()) return 0.0;
-  return best / plan.curve.time_to_target_s;
+  // Issue 34: the whole plan, its stop included, inside the duration.
+  const int last = static_cast<int>(plan.controls.size()) - 1;
+  EXPECT_NEAR(plan.controls.TimeAt(last), c.o.duration_s, 1e-9) << label;
+  for (double u : plan.controls.ValuesAt(last)) EXPECT_EQ(u, 0.0) << label;
+  double admissible = 0.0, nominal = 0.0;  // the best times, 0: none
+  for (const Motion& m : usual) {
+    std::cout << label << ": " << m.name << " " << m.curve.time_to_target_s << " s"
+              << (m.stays_in ? "" : " (leaves)")
+              << (m.every_robot_stays_in ? "" : " (leaves for a robot within the prior)") << "\n";
+    const double t = m.curve.time_to_target_s;
+    if (!m.stays_in || m.segment_starts_s.size() != 1) continue;
+    if (nominal == 0.0 || t < nominal) nominal = t;
+    if (m.every_robot_stays_in && (admissible == 0.0 || t < admissible)) admissible = t;
+  }
+  const double own = plan.curve.time_to_target_s;
+  std::cout << label << ": " << plan.name << " " << own << " s; best usual motion that keeps every "
+            << "robot within the prior inside " << admissible << " s, at the design point "
+            << nominal << " s\n";
+  // Issue 34: with no usual motion inside, a ratio against 1e300 passed any bound.
+  EXPECT_GT(nominal, 0.0) << label << ": no usual motion stays inside the arena";
+  return {admissible / own, nominal / own};
 }
 
 // A held parameter (a car's wheelbase from the drawing) is known to the plan: its value is
@@ -114,20 +127,27 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
 TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
   const PlanCase c = PlanReference(30.0);
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
-  EXPECT_GE(SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm"), 1.5);
+  const SpeedUps r = SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm");
+  // Measured (issue 34): 6.25 s against a circle each way's 15.5 s (2.48x) among the
+  // motions every robot within the prior survives; a figure-eight that only the design
+  // point survives needs 6.75 s (1.08x: issue 34's 1.5x is not reached there).
+  EXPECT_GE(r.admissible, 1.5);
+  EXPECT_GE(r.nominal, 1.0);
 }
 
 TEST(Plan, UnicycleWithALagAndATricycle) {
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
   const PlanCase u = UnicycleWithLag(30.0);
-  // Every motion reaches these targets within seconds: planning changes little here, and
-  // the greedy plan is within a quarter of the best usual motion (circles each way).
-  EXPECT_GE(SpeedUp(u, *ws, "unicycle + lag"), 0.75);
+  // Every motion reaches these targets within seconds. The plan is never worse than the
+  // best admissible usual motion (it becomes that motion when that is better); measured
+  // 4.5 s against 5.25 s (1.17x); a figure-eight at the design point only, 3.25 s.
+  EXPECT_GE(SpeedUp(u, *ws, "unicycle + lag").admissible, 1.0);
 
   const PlanCase t = Tricycle(30.0);
-  // Its tightest turn (0.66 m at 0.7 rad of steering) needs a larger floor for the
-  // usual motions to fit.
-  EXPECT_GE(SpeedUp(t, *MakeArena(-3.0, -2.0, 3.0, 2.0), "tricycle"), 1.0);
+  // Its tightest turn (0.66 m at 0.7 rad of steering) needs a larger floor for the usual
+  // motions to fit; none keeps every robot within the prior inside even there (a turn
+  // radius uncertain by a tenth), and at the design point the best needs 510 s (51x).
+  EXPECT_GE(SpeedUp(t, *MakeArena(-3.0, -2.0, 3.0, 2.0), "tricycle").nominal, 1.0);
 }
 
 // 200 robots drawn from the prior (inside its 3-sigma ellipsoid) driven open loop along the
@@ -357,7 +377,7 @@ void ExpectPredictedSigmaThroughPixels(PlanCase c, int trials, uint64_t seed, co
     std::cout << label << ": " << c.sys.params()[static_cast<size_t>(i)].name << " predicted "
               << predicted[i] << ", realised " << tally.Ratio(i) * predicted[i] << "\n";
   }
-  std::cout << label << " through pixels (pose sigma along the path "
+  std::cout << label << " through pixels, " << plan.name << " (pose sigma along the path "
             << c.o.info.pose_sigma.transpose() << "): pooled realised/predicted " << tally.Pooled()
             << ", " << tally.inside << " of " << tally.total << " errors inside 3 sigma, " << lost
             << " frames lost\n";
@@ -373,7 +393,9 @@ TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixels) {
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForAUnicycle) {
-  ExpectPredictedSigmaThroughPixels(UnicycleWithLag(8.0), 24, 13, "unicycle + lag");
+  // 48 runs: at 24 (72 errors, a pooled ratio's sampling spread about 0.08) the plan that
+  // stops inside its 8 s gave 0.74 with this seed and 0.93-1.00 with four others (21-24).
+  ExpectPredictedSigmaThroughPixels(UnicycleWithLag(8.0), 48, 13, "unicycle + lag");
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaThroughPixelsForATricycle) {

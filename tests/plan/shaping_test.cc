@@ -89,5 +89,27 @@ TEST(Shaping, AStopRampsEveryChannelToRestAtItsLimit) {
   ExpectSlewWithin(s, o);
 }
 
+// The longest stop is from the speed limits, the slowest channel's, rounded up to the
+// control rate: 20 / 40 s and 2 / 3 s at 20 Hz: 0.7 s (0.667 rounded up); no acceleration
+// limits, no ramp.
+TEST(Shaping, TheLongestStopIsFromTheLimits) {
+  PlanOptions o;
+  o.control_rate_hz = 20.0;
+  o.max_abs = {20.0, 2.0};
+  o.max_accel = {40.0, 3.0};
+  EXPECT_NEAR(LongestStopSeconds(o, 2), 0.7, 1e-12);
+  o.max_accel = {40.0, 0.0};
+  EXPECT_NEAR(LongestStopSeconds(o, 2), 0.5, 1e-12);
+  o.max_accel.clear();
+  EXPECT_EQ(LongestStopSeconds(o, 2), 0.0);
+  // What AppendStop takes from the limits is never longer.
+  o.max_accel = {40.0, 3.0};
+  ControlSignal s(2, 0);
+  Values u{};
+  u[0] = 20.0;
+  u[1] = -2.0;
+  EXPECT_LE(AppendStop(&s, 0.0, o, &u), LongestStopSeconds(o, 2) + 1e-12);
+}
+
 }  // namespace
 }  // namespace kincal::plan_internal

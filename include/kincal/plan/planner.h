@@ -50,6 +50,11 @@ struct PlanOptions {
   // Robot pose (x, y, theta) where the motion starts, at rest; unset: the workspace's
   // centre, heading along +x.
   std::optional<Eigen::Vector3d> start;
+  // Never worse than the usual motions: the best of them (UsualMotions) that keeps every
+  // robot within the prior inside replaces the greedy plan when it is better (MotionRank).
+  // It costs the usual motions' evaluation (about a second for 60 s); kincald's guidance,
+  // which plans short legs again and again, does without.
+  bool seed_with_usual = true;
   bool IsValid(const System& sys, std::string* error) const;
 };
 
@@ -89,19 +94,41 @@ struct Motion {
   SigmaCurve curve;
   std::vector<Eigen::Vector3d> path;  // measured target pose at the curve's times (nominal)
   bool stays_in = true;               // at the design point
-  double left_at_s = -1.0;            // first time it left the workspace (nominal), or -1
+  // Every robot within the prior keeps its target inside too (EveryRobotStaysIn; the
+  // plan's own guarantee, and what a usual motion is kept for).
+  bool every_robot_stays_in = true;
+  double left_at_s = -1.0;  // first time it left the workspace (nominal), or -1
 };
 
 // The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
 // `prior_cov` are the design point and its uncertainty. The controls end with a stop at
-// the acceleration limits (after duration_s), then a sample at rest.
+// the acceleration limits and are at rest by duration_s (the last segment ends early
+// enough for a stop from the speed limits); their last sample is at duration_s.
+// With o.seed_with_usual, `usual` (when given) receives the usual motions compared with.
 Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
-                  Motion* plan);
+                  Motion* plan, std::vector<Motion>* usual = nullptr);
 
-// The usual calibration motions on the same time budget, speeds and workspace: a square,
-// a circle each way, figure-eights, and the thesis's 99 constant-control runs (each a
-// separate segment). Each is evaluated like the plan.
+// How good an evaluated motion is, smaller better: its time to the targets, or without
+// targets the scaled variance left at its end (the sum over the scored parameters of
+// (sigma / prior sigma)^2).
+double MotionRank(const Motion& m, const PlanOptions& o, const Eigen::VectorXd& prior_sigma);
+
+// Whether the prior's corner robots (the design point and the robots at +-prior_sigmas
+// along each principal axis of the prior) keep their targets inside `ws` along controls
+// `u` from the start pose, checked every 0.05 s to u's last sample. (The planner's own
+// rule is stricter: it also checks the poses between them, pushed a fifth further out.)
+bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
+                       const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                       const ControlSignal& u);
+
+// The usual calibration motions on the same time budget, speeds and workspace, each the
+// best of its family: a square, a circle each way and a figure-eight, each tried at five
+// or six sizes and four speeds up to the limits: the best (MotionRank) that keeps every
+// robot within the prior inside, as the plan does, and before it, when better, the best
+// that stays in at the design point only (every_robot_stays_in false); and the thesis's 99
+// constant-control runs (each a separate segment, the robot carried back between them). Each is
+// evaluated like the plan.
 std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& params,
                                  const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                  const PlanOptions& o);
