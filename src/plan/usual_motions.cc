@@ -225,6 +225,7 @@ std::vector<Motion> Squares(const Family& f) {
   for (double side : kSquareSides) {
     for (double k : kSpeeds) {
       const double v = k * fastest;
+      if (!(v > 0.0)) continue;  // the limits allow no motion of this kind
       out.push_back(FromPieces(f.sys, f.p, f.o,
                                Described("square", Metres("side", side * f.size), v),
                                Square(f.sys, f.p, f.o, side * f.size, v, k * f.spin, r)));
@@ -233,8 +234,8 @@ std::vector<Motion> Squares(const Family& f) {
   return out;
 }
 
-// Circles of each radius (the smallest the robot can turn at least), `loops` laps each way
-// in turn: one lap each way a figure-eight, half the time each way a circle each way.
+// Circles of each radius (at least the tightest turn), turning each way in turn: one lap
+// each way a figure-eight, as many laps as fill half the driving time a circle each way.
 std::vector<Motion> Loops(const Family& f, const std::string& name, bool figure_eight) {
   std::vector<Motion> out;
   double last_r = -1.0;
@@ -246,7 +247,8 @@ std::vector<Motion> Loops(const Family& f, const std::string& name, bool figure_
     for (double k : kSpeeds) {
       const double v = k * fastest;
       const double loop = 2.0 * std::numbers::pi * r / v;
-      if (2.0 * loop > f.drive_s) continue;  // not a full turn each way in the time
+      // Not a full turn each way in the time (or no motion of this kind at all).
+      if (!(v > 0.0) || 2.0 * loop > f.drive_s) continue;
       const int laps = figure_eight ? 1 : std::max(1, static_cast<int>(0.5 * f.drive_s / loop));
       out.push_back(FromPieces(f.sys, f.p, f.o, Described(name, Metres("radius", r), v),
                                {{v, v / r, laps * loop}, {v, -v / r, laps * loop}}));
