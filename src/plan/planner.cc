@@ -69,10 +69,23 @@ bool FleetInside(const System& sys, const Workspace& ws, const Fleet& f) {
   return true;
 }
 
-// Drives the fleet to t1, checking every `check_s`; false if any target left (with
-// `stop_early`, as soon as one does, leaving the fleet there).
+// Whether every robot of the fleet (the design point and the axis robots) keeps its
+// target inside, without the poses between them.
+bool CornersInside(const System& sys, const Workspace& ws, const Fleet& f) {
+  for (const auto& x : f.x) {
+    Eigen::Vector3d z;
+    sys.Measure(x.data(), z.data());
+    if (!ws.Contains(z)) return false;
+  }
+  return true;
+}
+
+using FleetCheck = bool (*)(const System&, const Workspace&, const Fleet&);
+
+// Drives the fleet to t1, checking every `check_s` with `inside`; false if any target left
+// (with `stop_early`, as soon as one does, leaving the fleet there).
 bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, double t1,
-                double check_s, bool stop_early, Fleet* f) {
+                double check_s, bool stop_early, Fleet* f, FleetCheck inside_check = FleetInside) {
   bool inside = true;
   while (f->t_s < t1 - 1e-12) {
     const double t = std::min(t1, f->t_s + check_s);
@@ -80,7 +93,7 @@ bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, 
       sys.Propagate(x.data(), x.data(), f->t_s, t, u, static_cast<const double*>(nullptr));
     }
     f->t_s = t;
-    if (!FleetInside(sys, ws, *f)) {
+    if (!inside_check(sys, ws, *f)) {
       inside = false;
       if (stop_early) return false;
     }
@@ -142,18 +155,8 @@ bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
                        const ControlSignal& u) {
   Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
   const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
-  for (double t = 0.0;; t = std::min(end_s, t + kCheckS)) {
-    for (auto& x : fleet.x) {
-      if (t > fleet.t_s) {
-        sys.Propagate(x.data(), x.data(), fleet.t_s, t, u, static_cast<const double*>(nullptr));
-      }
-      Eigen::Vector3d z;
-      sys.Measure(x.data(), z.data());
-      if (!ws.Contains(z)) return false;
-    }
-    fleet.t_s = t;
-    if (t >= end_s) return true;
-  }
+  return CornersInside(sys, ws, fleet) &&
+         DriveFleet(sys, u, ws, end_s, kCheckS, true, &fleet, CornersInside);
 }
 
 namespace {
@@ -427,8 +430,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
                false, &fleet);
   }
-  const double rest_s = plan_internal::AppendStop(&plan->controls, segments * o.segment_s, o, &now);
-  if (rest_s < o.duration_s - 1e-9) plan_internal::AppendRest(&plan->controls, o.duration_s);
+  plan_internal::AppendStopAndRest(&plan->controls, segments * o.segment_s, o.duration_s, o, &now);
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
   if (o.seed_with_usual) {
     std::vector<Motion> compared;

@@ -59,6 +59,11 @@ double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Valu
   return rest_s;
 }
 
+void AppendStopAndRest(ControlSignal* signal, double t0_s, double end_s, const PlanOptions& o,
+                       Values* u) {
+  if (AppendStop(signal, t0_s, o, u) < end_s - 1e-9) AppendRest(signal, end_s);
+}
+
 double LongestStopSeconds(const PlanOptions& o, int num_channels) {
   Values limit{};
   for (size_t i = 0; i < static_cast<size_t>(num_channels) && i < o.max_abs.size(); ++i) {

@@ -26,6 +26,11 @@ void AppendRest(ControlSignal* signal, double t_s);
 // sample at rest; *u ends at zero. Returns the time of the rest sample.
 double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u);
 
+// AppendStop from t0_s, and a sample at rest at end_s when the stop is over before it: a
+// motion at rest by end_s (its last sample there) when end_s leaves time for the stop.
+void AppendStopAndRest(ControlSignal* signal, double t0_s, double end_s, const PlanOptions& o,
+                       Values* u);
+
 // The longest stop AppendStop can need: every channel from its limit to zero, rounded up to
 // the control rate. A motion that must be at rest by duration_s stops driving this long
 // before it.

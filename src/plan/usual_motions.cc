@@ -25,10 +25,10 @@ struct Piece {
   double v, omega, seconds;
 };
 
-// The options with every limit cut to the headroom.
-PlanOptions WithHeadroom(const PlanOptions& o) {
+// The options with every limit cut to `headroom` of it.
+PlanOptions WithHeadroom(const PlanOptions& o, double headroom = kHeadroom) {
   PlanOptions tight = o;
-  for (double& m : tight.max_abs) m *= kHeadroom;
+  for (double& m : tight.max_abs) m *= headroom;
   return tight;
 }
 
@@ -53,8 +53,7 @@ bool Drivable(const System& sys, const Eigen::VectorXd& p, const PlanOptions& ti
 // headroom of the limits.
 double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o, double radius,
                    double headroom = kHeadroom) {
-  PlanOptions tight = o;
-  for (double& m : tight.max_abs) m *= headroom;
+  const PlanOptions tight = WithHeadroom(o, headroom);
   return LargestFitting(0.0, 10.0, 50, [&](double v) {
     return Drivable(sys, p, tight, v, radius > 0.0 ? v / radius : 0.0);
   });
@@ -64,8 +63,7 @@ double CruiseSpeed(const System& sys, const Eigen::VectorXd& p, const PlanOption
 double SpinRate(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
                 double headroom = kHeadroom) {
   if (o.max_curvature > 0.0) return 0.0;
-  PlanOptions tight = o;
-  for (double& m : tight.max_abs) m *= headroom;
+  const PlanOptions tight = WithHeadroom(o, headroom);
   const double w =
       LargestFitting(0.0, 50.0, 50, [&](double w) { return Drivable(sys, p, tight, 0.0, w); });
   return w > 1e-3 ? w : 0.0;
@@ -102,8 +100,7 @@ Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions
     plan_internal::AppendSlewed(&m.controls, t, t1, to, o, &now);
     t = t1;
   }
-  const double rest_s = plan_internal::AppendStop(&m.controls, t, o, &now);
-  if (rest_s < o.duration_s - 1e-9) plan_internal::AppendRest(&m.controls, o.duration_s);
+  plan_internal::AppendStopAndRest(&m.controls, t, o.duration_s, o, &now);
   return m;
 }
 
