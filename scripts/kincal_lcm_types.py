@@ -23,7 +23,7 @@ def use_lcm_types(path=None):
 
 # The kincal messages, by name (lcm/*.lcm).
 MESSAGE_NAMES = ("preview_t", "frame_t", "markers_t", "pose_t", "params_t", "calibration_t",
-                 "model_check_t", "health_t", "guidance_t", "controls_t", "run_t")
+                 "model_check_t", "health_t", "guidance_t", "controls_t", "run_t", "truth_t")
 
 
 def message_types():

@@ -13,6 +13,9 @@ event's time (log time) and the message's utime (the schema's timestamp):
                         green, unassigned blobs red, the target's outline (the identified
                         markers' convex hull) and its id
   kincal.pose_t      -> foxglove.PoseInFrame (frame "floor"; invalid poses: JSON beside)
+  kincal.truth_t     -> JSON (the simulator's true parameters, for plots beside the
+                        estimate) and foxglove.PoseInFrame on "/<channel>/pose" (where the
+                        tracked point truly stands, frame "floor"; none while carried)
   everything else    -> JSON (params, calibration, model check, health, guidance, controls,
                         runs), one object per message with the LCM type's fields
 
@@ -193,6 +196,15 @@ class Exporter:
         if len(self.markers) > MARKERS_KEPT:
             self.markers.pop(next(iter(self.markers)))
         self.log("/" + channel, "ImageAnnotations", annotations(m), log_time)
+
+    def on_truth_t(self, channel, m, log_time):
+        from foxglove.messages import Pose, PoseInFrame, Vector3
+        self.on_json(channel, m, log_time)
+        if m.on_floor:
+            self.log("/" + channel + "/pose", "PoseInFrame",
+                     PoseInFrame(timestamp=timestamp(m.utime), frame_id="floor",
+                                 pose=Pose(position=Vector3(x=m.x, y=m.y, z=0.0), orientation=quaternion(m.theta))),
+                     log_time)
 
     def on_pose_t(self, channel, m, log_time):
         from foxglove.messages import FrameTransform, Pose, PoseInFrame, Vector3

@@ -10,8 +10,10 @@ otherwise) or by a recording (`--log FILE`, with play/pause and a time slider):
     frames) with every detected marker (identified: green, unassigned blobs: red), the
     identified target's outline and id, and its recent track in the picture;
   * a map of the floor: the part the camera sees (preview_t's polygon, from kincald's
-    camera and floor calibration), the target's track and its pose with its axes;
-  * the parameters against time with +-2 sigma (and the truth with `--truth`), the status,
+    camera and floor calibration), the target's track and its pose with its axes, and
+    in a simulation the true track (KINCAL_TRUTH, which kincald's simulator publishes);
+  * the parameters against time with +-2 sigma and, in a simulation, the truth (from
+    KINCAL_TRUTH, or a scenario's `truth:` map with `--truth`), the status,
     the model check's verdict with its suspected effect and evidence, health (frame rate,
     drops, gated poses, latency, resets) and the guidance's advice;
   * "no frames yet" / "daemon not heard for N s" instead of a stale picture.
@@ -92,6 +94,8 @@ class Timeline:
         self.track = collections.deque()      # (utime, [u, v]) target centres in the picture
         self.poses = collections.deque()      # (utime, [x, y, theta]) valid poses on the floor
         self.floor_seen = None                # the floor polygon the camera sees (preview_t)
+        self.truth = collections.deque()      # (utime, [x, y]) the simulator's true stand (truth_t)
+        self.truth_params = {}                # name -> true value (the simulator's truth_t)
         self.params = collections.deque()     # (utime, {names, values, sigmas, status, source})
         self.latest = {}                      # kind -> deque of (utime, dict)
         self.errors = {}                      # channel -> "what", count
@@ -178,6 +182,16 @@ class Timeline:
             while len(self.poses) > POSES_KEPT:
                 self.poses.popleft()
 
+    def _on_truth_t(self, m, utime, _):
+        self.truth_params = {str(n): float(v) for n, v in zip(m.names, m.values)}
+        if not m.on_floor:
+            return
+        self.truth.append((utime, [m.x, m.y]))
+        self._trim(self.truth, utime)
+        if self.history_us is not None:
+            while len(self.truth) > POSES_KEPT:
+                self.truth.popleft()
+
     def _on_params_t(self, m, utime, _):
         self.params.append((utime, {"names": list(m.names), "units": list(m.units), "values": list(m.values),
                                     "sigmas": list(m.sigmas), "status": int(m.status), "source": int(m.source),
@@ -239,9 +253,8 @@ class Timeline:
                 markers = found[1] if found else None
             track = [c for u, c in self.track if t is None or u <= t][-TRACK_LEN:]
             poses = [c for u, c in self.poses if t is None or u <= t][-POSES_KEPT:]
-            floor_track = poses[::max(1, len(poses) // FLOOR_POINTS)]
-            if poses and (not floor_track or floor_track[-1] is not poses[-1]):
-                floor_track.append(poses[-1])
+            floor_track = thinned(poses, FLOOR_POINTS)
+            truth_track = thinned([c for u, c in self.truth if t is None or u <= t][-POSES_KEPT:], FLOOR_POINTS)
             params = [(u, p) for u, p in self.params if t is None or u <= t]
             step = max(1, len(params) // max_points)
             history = params[::step]
@@ -251,7 +264,8 @@ class Timeline:
             return {
                 "preview": preview, "markers": markers, "track": track,
                 "floor": {"seen": self.floor_seen, "track": floor_track, "pose": poses[-1] if poses else None,
-                          "path": self._advised_path(guidance)},
+                          "path": self._advised_path(guidance), "truth": truth_track},
+                "truth_params": dict(self.truth_params),
                 "params": [{"t": (u - (self.first_utime or u)) * 1e-6, **p} for u, p in history],
                 "latest_params": params[-1][1] if params else None,
                 "model_check": self._at(self.latest.get("model_check"), t),
@@ -263,6 +277,14 @@ class Timeline:
                 "heard_s_ago": None if self.last_heard is None else time.monotonic() - self.last_heard,
                 "span": [0.0, ((self.last_utime or 0) - (self.first_utime or 0)) * 1e-6],
             }
+
+
+def thinned(points, n):
+    """About n of the points, evenly, always with the last."""
+    out = points[::max(1, len(points) // n)]
+    if points and (not out or out[-1] is not points[-1]):
+        out.append(points[-1])
+    return out
 
 
 class FoxgloveLive:
@@ -458,7 +480,9 @@ class Server:
             p.pop("offset", None)
             s["preview"] = p
         s["mode"] = "log" if self.log_path else "live"
-        s["truth"] = self.truth
+        # The truth: --truth's scenario when given, else what the simulator publishes.
+        learned = s.pop("truth_params")
+        s["truth"] = self.truth or learned
         s["clients"] = self.clients
         return s
 
@@ -563,7 +587,8 @@ def main(argv=None):
     src = ap.add_mutually_exclusive_group()
     src.add_argument("--lcm-url", default="", help="kincald's LCM URL (default: LCM's default, as kincald's)")
     src.add_argument("--log", help="a kincald recording to play instead of live LCM")
-    ap.add_argument("--truth", help="a scenario YAML whose truth: map is drawn on the charts (simulations)")
+    ap.add_argument("--truth", help="a scenario YAML whose truth: map is drawn on the charts "
+                    "(default: what kincald's simulator publishes on KINCAL_TRUTH)")
     ap.add_argument("--rate", type=float, default=10.0, help="updates a second to each browser (default 10)")
     ap.add_argument("--history-s", type=float, default=3600.0, help="live: data time kept for the charts (default 3600)")
     ap.add_argument("--foxglove", type=int, nargs="?", const=FOXGLOVE_PORT, metavar="PORT",

@@ -2,7 +2,9 @@
 robot with its preview; the export is read back with the `mcap` package (not the writer's
 SDK), and for every LCM channel of the recording the MCAP has a channel of the same name
 with Foxglove's schema for it, as many messages, with the same log times; the derived
-topics (/tf, the preview's annotations) hold one message per valid pose and per preview,
+topics (/tf, the preview's annotations, the simulator's true pose) hold one message per
+valid pose, per preview and per truth on the floor, the truth's JSON carries the
+scenario's parameters,
 and the annotations' circles sit on the published markers (pixels, Foxglove's pixel-corner
 origin: u + 0.5). A recording that is not one, or one cut short, is a named error with
 nothing written.
@@ -26,12 +28,31 @@ EXPECTED_SCHEMA = {
     "KINCAL_HEALTH": "kincal.health_t",
     "KINCAL_MODEL_CHECK": "kincal.model_check_t",
     "KINCAL_CONTROLS": "kincal.controls_t",
+    "KINCAL_TRUTH": "kincal.truth_t",
 }
 
 
 def lcm_events(path):
     from kincal_mcap import read_events
     return list(read_events(path))
+
+
+def check_truth_json(out, failures):
+    """The truth's JSON messages carry the parameters of the shipped simulation's scenario
+    (config/kincald_sim.yaml -> sim_daemon.yaml), read here from the YAML itself."""
+    import json
+    import yaml
+    from mcap.reader import make_reader
+    with open(os.path.join(HERE, "..", "config", "sim_daemon.yaml")) as f:
+        want = yaml.safe_load(f)["truth"]
+    with open(out, "rb") as f:
+        for _, _, message in make_reader(f).iter_messages(topics=["/KINCAL_TRUTH"]):
+            m = json.loads(message.data)
+            got = dict(zip(m["names"], m["values"]))
+            if any(got.get(k) != v for k, v in want.items()):
+                failures.append(f"/KINCAL_TRUTH: parameters {got}, the scenario's {want}")
+            return
+    failures.append("/KINCAL_TRUTH: no message")
 
 
 def main():
@@ -45,10 +66,10 @@ def main():
 
     from kincal_lcm_types import use_lcm_types
     use_lcm_types()
-    from kincal import markers_t, pose_t, preview_t
+    from kincal import markers_t, pose_t, preview_t, truth_t
     events = lcm_events(log)
     by_channel = {}
-    markers, valid_poses, previews, preview_axes = {}, 0, 0, {}
+    markers, valid_poses, previews, preview_axes, truths_on_floor = {}, 0, 0, {}, 0
     for ch, data, t in events:
         by_channel.setdefault(ch, []).append(t)
         if ch == "KINCAL_MARKERS":
@@ -56,6 +77,8 @@ def main():
             markers[m.utime] = m
         elif ch == "KINCAL_POSE":
             valid_poses += pose_t.decode(data).valid
+        elif ch == "KINCAL_TRUTH":
+            truths_on_floor += truth_t.decode(data).on_floor
         elif ch == "KINCAL_PREVIEW":
             previews += 1
             p = preview_t.decode(data)
@@ -82,6 +105,10 @@ def main():
             failures.append(f"{topic}: schema {schemas.get(topic)}, expected {want}")
     if len(got.get("/tf", [])) != valid_poses:
         failures.append(f"/tf: {len(got.get('/tf', []))} transforms, {valid_poses} valid poses")
+    if not truths_on_floor or len(got.get("/KINCAL_TRUTH/pose", [])) != truths_on_floor:
+        failures.append(f"/KINCAL_TRUTH/pose: {len(got.get('/KINCAL_TRUTH/pose', []))} poses, "
+                        f"{truths_on_floor} truths on the floor")
+    check_truth_json(out, failures)
     if len(got.get("/KINCAL_MARKERS/preview", [])) != previews:
         failures.append(f"preview annotations: {len(got.get('/KINCAL_MARKERS/preview', []))}, {previews} previews")
 

@@ -6,13 +6,14 @@ live:  kincald on the simulated camera with guidance (--preview, paced, on an LC
        the page's own record and in the canvas's pixels; in a screenshot too, on the paused
        recording below), the floor the camera sees with the track, the pose and the
        guidance's advised path (as the last KINCAL_GUIDANCE has it), one chart per
-       parameter named after it with the scenario's truth (--truth), >= 5 updates a
+       parameter named after it with the truth kincald's simulator publishes (KINCAL_TRUTH,
+       equal to the scenario's truth: map) and the true track on the floor, >= 5 updates a
        second, frames on the page <= 250 ms after their capture, a second browser served
        at the same time, and once kincald has ended the health the
        last KINCAL_HEALTH says (the preview's counts too) and "daemon not heard for N s"
        over the picture.
 log:   `kincal view --log` on the recording kincald made: play, pause and the slider move
-       the picture and the charts through the run.
+       the picture and the charts through the run; the truth is the recording's.
 errors: garbage on a kincal channel is named on the page; a port in use and a file that
        is not a recording are named and exit 1.
 
@@ -182,6 +183,20 @@ def load_truth_map(path):
     return load_truth(path)
 
 
+def check_truth(driver, scenario, failures, where):
+    """The simulated robot's truth, as kincald's simulator published it (no --truth given):
+    on every chart the scenario's value, and the true track on the floor map."""
+    truth = load_truth_map(scenario)
+    drawn = driver.execute_script(
+        "return Object.fromEntries(Array.from(document.querySelectorAll('#charts .chart')).map("
+        "d => [d.dataset.param, (d.data.find(t => t.name === 'truth') || {y: [null]}).y[0]]))")
+    if not drawn or any(drawn.get(n) != truth.get(n) for n in drawn):
+        failures.append(f"{where}: truth on the charts {drawn}, the scenario's {truth}")
+    floor = driver.execute_script("return window.kincalView.floorDrawn")
+    if not floor or floor.get("truth", 0) < 10:
+        failures.append(f"{where}: the true track on the floor map: {floor}")
+
+
 def check_advised_path(driver, health, failures):
     """The guidance's path on the floor map: as many points as the last KINCAL_GUIDANCE
     carries, as far from its start to its end (the message's path is in the target's frame,
@@ -212,7 +227,7 @@ def live(kincald, kincal, work, failures, timing=True):
                                "--record", log, "-q"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     scenario = os.path.join(os.path.dirname(config), "sim_daemon.yaml")  # the config's sim.scenario
-    view = start_view(kincal, ["--lcm-url", url, "--truth", scenario], port)
+    view = start_view(kincal, ["--lcm-url", url], port)
     driver = browser()
     second = browser()
     try:
@@ -257,13 +272,7 @@ def live(kincald, kincal, work, failures, timing=True):
             "return Array.from(document.querySelectorAll('#charts .chart')).map(d => [d.dataset.param, d.data[0].name])")
         if len(names) != n_params or any(a != b for a, b in names):
             failures.append(f"charts {names} for {n_params} parameters")
-        # The simulated robot's truth (--truth: the scenario's truth: map) on every chart.
-        truth = load_truth_map(scenario)
-        drawn = driver.execute_script(
-            "return Object.fromEntries(Array.from(document.querySelectorAll('#charts .chart')).map("
-            "d => [d.dataset.param, (d.data.find(t => t.name === 'truth') || {y: [null]}).y[0]]))")
-        if not drawn or any(drawn.get(n) != truth.get(n) for n in drawn):
-            failures.append(f"truth on the charts {drawn}, the scenario's {truth}")
+        check_truth(driver, scenario, failures, "live")
         # Garbage on a kincal channel: named on the page, with its channel.
         import lcm
         lcm.LCM(url).publish("KINCAL_HEALTH_X", b"\x00garbage, not a kincal message")
@@ -299,7 +308,7 @@ def live(kincald, kincal, work, failures, timing=True):
     return log
 
 
-def recording(kincal, log, work, failures):
+def recording(kincal, log, scenario, work, failures):
     port = free_port()
     view = start_view(kincal, ["--log", log], port)
     driver = browser()
@@ -327,6 +336,7 @@ def recording(kincal, log, work, failures):
         want = check_overlay(driver, failures)
         if not want:
             failures.append("log: no markers drawn on the paused picture")
+        check_truth(driver, scenario, failures, "log")
         check_screenshot(driver, want, failures, os.path.join(work, "log_picture.png"))
         driver.find_element("id", "play").click()
         time.sleep(1.5)
@@ -368,7 +378,8 @@ def main():
     os.makedirs(work)
     failures = []
     log = live(kincald, kincal, work, failures, timing)
-    recording(kincal, log, work, failures)
+    scenario = os.path.join(HERE, "..", "config", "sim_daemon.yaml")  # kincald_sim_guidance.yaml's
+    recording(kincal, log, scenario, work, failures)
     errors(kincal, log, failures)
     for f in failures:
         print("FAIL:", f)

@@ -188,7 +188,7 @@ function renderFloor(f) {
   const g = c.getContext("2d");
   g.clearRect(0, 0, c.width, c.height);
   if (!f) return;
-  const pts = (f.seen || []).concat((f.track || []).map((p) => [p[0], p[1]]), f.path || []);
+  const pts = (f.seen || []).concat((f.track || []).map((p) => [p[0], p[1]]), f.path || [], f.truth || []);
   if (!pts.length) {
     g.fillStyle = "#888";
     g.fillText("no floor polygon or pose yet", 10, 20);
@@ -209,6 +209,11 @@ function renderFloor(f) {
   };
   g.lineWidth = 1.5;
   if (f.seen && f.seen.length >= 3) line(f.seen, "#7fa7c9", true);
+  if (f.truth && f.truth.length > 1) {  // the simulator's true track, under the measured one
+    g.setLineDash([2, 3]);
+    line(f.truth, "#ffffff", false);
+    g.setLineDash([]);
+  }
   if (f.track && f.track.length > 1) line(f.track, "#ffcc00", false);
   if (f.path && f.path.length > 1) {  // the guidance's advised motion, from where it was advised
     g.setLineDash([6, 4]);
@@ -224,7 +229,8 @@ function renderFloor(f) {
   g.fillStyle = "#888";
   g.fillText(`${fmt(span, 2)} m across`, 6, c.height - 6);
   window.kincalView.floorDrawn = {
-    seen: (f.seen || []).length, track: (f.track || []).length, pose: f.pose, path: f.path || null };
+    seen: (f.seen || []).length, track: (f.track || []).length, pose: f.pose, path: f.path || null,
+    truth: (f.truth || []).length };
 }
 
 function renderEstimate(s) {

@@ -196,6 +196,7 @@ void LoadLcm(Section s, DaemonConfig& c) {
   s.Get("calibration_channel", &c.lcm.calibration_channel);
   s.Get("markers_channel", &c.lcm.markers_channel);
   s.Get("preview_channel", &c.lcm.preview_channel);
+  s.Get("truth_channel", &c.lcm.truth_channel);
   s.Get("frame_channel", &c.lcm.frame_channel);
   s.Get("publish_frames", &c.lcm.publish_frames);
   s.Get("publish_markers", &c.lcm.publish_markers);

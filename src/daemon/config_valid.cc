@@ -54,7 +54,7 @@ bool GuidanceFitsTheRobot(const DaemonConfig& c, std::string* error) {
 bool LcmOptions::IsValid(std::string* error) const {
   for (const auto* ch : {&controls_channel, &pose_channel, &params_channel, &health_channel,
                          &model_check_channel, &markers_channel, &frame_channel, &guidance_channel,
-                         &calibration_channel, &preview_channel}) {
+                         &calibration_channel, &preview_channel, &truth_channel}) {
     if (!Expect(!ch->empty() && ch->size() < 64, "lcm channel names must be 1..63 characters",
                 error)) {
       return false;

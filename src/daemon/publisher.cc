@@ -16,7 +16,9 @@ Status Publisher::Open(const LcmOptions& lcm, const RecordOptions& record, size_
                         record.flush_every_s, &recorder_);
 }
 
-void Publisher::PublishRaw(const std::string& channel, const void* data, size_t n) {
+void Publisher::PublishRaw(const std::string& channel, const void* data, size_t n,
+                           int64_t log_utime) {
+  if (log_utime >= 0) Record(channel, log_utime, data, n);
   if (!lcm_) return;
   std::lock_guard lock(mu_);
   lcm_->publish(channel, data, static_cast<unsigned>(n));

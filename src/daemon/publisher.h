@@ -28,8 +28,9 @@ class Publisher {
     }
     if (recorder_) recorder_->WriteMessage(channel, utime, m);
   }
-  // Raw bytes to LCM only (a simulated robot's controls).
-  void PublishRaw(const std::string& channel, const void* data, size_t n);
+  // Raw bytes to LCM, and to the log too when log_utime >= 0 (a simulated robot's
+  // controls: LCM only; its truth: both).
+  void PublishRaw(const std::string& channel, const void* data, size_t n, int64_t log_utime = -1);
   // Raw bytes to the log only (every control message received).
   void Record(const std::string& channel, int64_t utime, const void* data, size_t n);
 

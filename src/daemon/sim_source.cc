@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <kincal/controls_t.hpp>
+#include <kincal/truth_t.hpp>
 #include <numbers>
 #include <opencv2/imgproc.hpp>
 #include <random>
@@ -72,6 +73,7 @@ class SimSource final : public FrameSource {
     msg_.num_controls = nc;
     for (const auto& ch : truth_.model().controls()) msg_.names.push_back(ch.name);
     msg_.values.assign(static_cast<size_t>(nc), 0.0);
+    InitTruthMessage();
   }
 
   std::string name() const override { return "sim(" + cfg_.sim.scenario + ")"; }
@@ -121,8 +123,8 @@ class SimSource final : public FrameSource {
       carrying_ = false;
     }
     vision::Pose3 pose;
+    Eigen::Vector3d target = Eigen::Vector3d::Zero();
     if (!carrying_) {
-      Eigen::Vector3d target;
       truth_.Measure(x_.data(), target.data());
       pose = vision::CameraPoseOnFloor(vis_.floor, target, vis_.target_height_m);
       in_view = InView(pose);
@@ -145,6 +147,7 @@ class SimSource final : public FrameSource {
     f->device_utime = f->utime;
     f->sequence = sequence_++;
     f->arrival_mono_ns = MonotonicNs();
+    PublishTruth(*f, carrying_ ? nullptr : &target);
     ++k_;
     return SourceStatus::kFrame;
   }
@@ -269,6 +272,32 @@ class SimSource final : public FrameSource {
     return true;
   }
 
+  // The parts of the truth message that never change: the parameters' names and values.
+  void InitTruthMessage() {
+    truth_msg_.schema_version = 1;
+    truth_msg_.model = sc_.model;
+    truth_msg_.scenario = cfg_.sim.scenario;
+    truth_msg_.num_params = truth_.num_params();
+    for (int i = 0; i < truth_.num_params(); ++i) {
+      truth_msg_.names.push_back(truth_.params()[static_cast<size_t>(i)].name);
+      truth_msg_.values.push_back(p_true_[i]);
+    }
+  }
+
+  // The truth at this frame: where the tracked point stands (none while carried).
+  void PublishTruth(const Frame& f, const Eigen::Vector3d* target) {
+    truth_msg_.utime = f.utime;
+    truth_msg_.frame_sequence = f.sequence;
+    truth_msg_.on_floor = target != nullptr;
+    truth_msg_.x = target ? target->x() : 0.0;
+    truth_msg_.y = target ? target->y() : 0.0;
+    truth_msg_.theta = target ? target->z() : 0.0;
+    const int n = truth_msg_.getEncodedSize();
+    truth_buf_.resize(static_cast<size_t>(n));  // the same size every frame: no allocation
+    truth_msg_.encode(truth_buf_.data(), 0, n);
+    publish_(cfg_.truth_channel, truth_buf_.data(), truth_buf_.size(), f.utime);
+  }
+
   void EmitControl(size_t i) {
     const auto& v = cmd_.ValuesAt(static_cast<int>(i));
     for (int k = 0; k < msg_.num_controls; ++k)
@@ -278,7 +307,7 @@ class SimSource final : public FrameSource {
     const int n = msg_.getEncodedSize();
     buf_.resize(static_cast<size_t>(n));
     msg_.encode(buf_.data(), 0, n);
-    publish_(cfg_.controls_channel, buf_.data(), buf_.size());
+    publish_(cfg_.controls_channel, buf_.data(), buf_.size(), kNetworkOnly);
     if (!cfg_.sim.controls_via_lcm) intake_(buf_.data(), buf_.size(), msg_.utime);
   }
 
@@ -301,6 +330,8 @@ class SimSource final : public FrameSource {
   vision::RenderOptions render_;
   kincal::controls_t msg_;
   std::vector<uint8_t> buf_;
+  kincal::truth_t truth_msg_;
+  std::vector<uint8_t> truth_buf_;
   size_t k_ = 0, ci_ = 0;
   int64_t sequence_ = 0;
   double t_prev_ = 0.0;

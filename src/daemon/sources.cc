@@ -50,8 +50,8 @@ StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const V
     case SourceKind::kSim:
       return MakeSimSource(
           {c.sim, c.robot.model,
-           c.sim.controls_channel.empty() ? c.lcm.controls_channel : c.sim.controls_channel, c.file,
-           c.guidance.drive_pause_s},
+           c.sim.controls_channel.empty() ? c.lcm.controls_channel : c.sim.controls_channel,
+           c.lcm.truth_channel, c.file, c.guidance.drive_pause_s},
           v, std::move(controls), std::move(publish), drive);
     case SourceKind::kReplay:
       return MakeReplaySource(c.replay, c.lcm, std::move(controls), std::move(poses));

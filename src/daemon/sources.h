@@ -30,21 +30,27 @@ using ControlIntake = std::function<void(const void* data, size_t n, int64_t rec
 // A log without frames hands each logged measurement over as the raw kincal.pose_t bytes;
 // `utime_shift` is to be added to its stamps (a looped replay's later passes).
 using PoseIntake = std::function<void(const void* data, size_t n, int64_t utime_shift)>;
-// Publishes raw bytes on the network only (the simulated robot's controls).
-using NetworkPublish = std::function<void(const std::string& channel, const void* data, size_t n)>;
+// Publishes raw bytes on the network, and into the recording when `log_utime` is not
+// kNetworkOnly (the simulated robot's controls go to the network only: they are recorded
+// where they are received; its truth goes to both).
+inline constexpr int64_t kNetworkOnly = -1;
+using NetworkPublish =
+    std::function<void(const std::string& channel, const void* data, size_t n, int64_t log_utime)>;
 
 // The simulated camera: renders the scenario's robot (true parameters, hidden effects)
-// carrying the target, and publishes the robot's commands like a robot would. A run
+// carrying the target, and publishes the robot's commands like a robot would, and with
+// every frame the truth (kincal.truth_t on truth_channel, network and recording). A run
 // ends when the target nears the image edge; the robot is then carried back to the
 // centre (no target in view for sim.carry_s) and starts a new run. The robot drives the
 // scenario's random controls, or with `drive` (guidance.drive) legs planned from the
 // running estimate (daemon/drive_link.h), each followed by drive_pause_s at rest.
 struct SimSourceOptions {
   SimOptions sim;
-  std::string robot_model;       // the config's robot.model: must be the scenario's
-  std::string controls_channel;  // where the simulated robot publishes its commands
-  std::string config_file;       // named in errors
-  double drive_pause_s = 0.5;    // guidance.drive_pause_s
+  std::string robot_model;                     // the config's robot.model: must be the scenario's
+  std::string controls_channel;                // where the simulated robot publishes its commands
+  std::string truth_channel = "KINCAL_TRUTH";  // lcm.truth_channel
+  std::string config_file;                     // named in errors
+  double drive_pause_s = 0.5;                  // guidance.drive_pause_s
 };
 class DriveLink;
 // An error names the scenario file and what does not fit the config.

@@ -43,6 +43,7 @@ struct LcmOptions {
   std::string markers_channel = "KINCAL_MARKERS";
   std::string frame_channel = "KINCAL_FRAME";
   std::string preview_channel = "KINCAL_PREVIEW";  // preview.enabled: downscaled JPEG frames
+  std::string truth_channel = "KINCAL_TRUTH";      // source sim: the simulated robot's truth
   bool publish_frames = false;  // frames go to the log; on the network only if asked
   bool publish_markers = true;
   bool IsValid(std::string* error) const;
