@@ -68,11 +68,14 @@ struct SpeedUps {
   double admissible = 0.0, nominal = 0.0;
 };
 
-SpeedUps SpeedUp(const PlanCase& c, const Workspace& ws, const char* label) {
+SpeedUps SpeedUp(const PlanCase& c, const Workspace& ws, const char* label,
+                 Motion* plan_out = nullptr, std::vector<Motion>* usual_out = nullptr) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion plan;
   std::vector<Motion> usual;
   const Status s = PlanMotion(c.sys, c.p, prior, ws, c.o, &plan, &usual);
+  if (plan_out != nullptr) *plan_out = plan;
+  if (usual_out != nullptr) *usual_out = usual;
   EXPECT_TRUE(s.ok()) << s.message();
   EXPECT_TRUE(plan.stays_in);
   EXPECT_TRUE(EveryRobotStaysIn(c.sys, c.p, prior, ws, c.o, plan.controls)) << label;
@@ -124,15 +127,53 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
                    .ok());
 }
 
+// The plan and the usual motions that keep every robot within the prior inside, driven by
+// a true robot other than the design point: the plan's time to the targets over the best
+// of theirs (their sigma curves evaluated at that robot; the controls are the same).
+double SpeedUpFor(const PlanCase& c, const Workspace& ws, const Motion& plan,
+                  const std::vector<Motion>& usual, const Eigen::VectorXd& truth) {
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  Motion own = plan;
+  EvaluateMotion(c.sys, truth, prior, ws, c.o, kCurveStepS, &own);
+  double best = 0.0;
+  for (const Motion& m : usual) {
+    if (!m.every_robot_stays_in || m.segment_starts_s.size() != 1) continue;
+    Motion at = m;
+    EvaluateMotion(c.sys, truth, prior, ws, c.o, kCurveStepS, &at);
+    if (best == 0.0 || at.curve.time_to_target_s < best) best = at.curve.time_to_target_s;
+  }
+  EXPECT_GT(best, 0.0);
+  return best / own.curve.time_to_target_s;
+}
+
 TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
   const PlanCase c = PlanReference(30.0);
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
-  const SpeedUps r = SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm");
+  Motion plan;
+  std::vector<Motion> usual;
+  const SpeedUps r = SpeedUp(c, *ws, "diffdrive + lag, delay, lever arm", &plan, &usual);
   // Measured (issue 34): 6.25 s against a circle each way's 15.5 s (2.48x) among the
   // motions every robot within the prior survives; a figure-eight that only the design
   // point survives needs 6.75 s (1.08x: issue 34's 1.5x is not reached there).
   EXPECT_GE(r.admissible, 1.5);
   EXPECT_GE(r.nominal, 1.0);
+  // Issue 34: for the true robot anywhere within the prior's 3 sigma, not only at the
+  // guess: each parameter at +-3 sigma (measured 1.8x to 2.6x). The lag's -3 sigma is
+  // below zero; at 0.02 s (-2.4 sigma) the plan still needs 14.5 s against a square's
+  // 25.75 s (1.78x), at 0.01 s 1.43x, and as the lag vanishes it cannot be told from the
+  // delay by any motion within the acceleration limits (at 1 ms the plan's sigma curve
+  // reaches 3 ms in 5,976 s, a square's in 563 s: docs/plan.md).
+  for (int i = 0; i < static_cast<int>(c.p.size()); ++i) {
+    for (const double k : {-3.0, 3.0}) {
+      Eigen::VectorXd truth = c.p;
+      truth[i] += k * c.prior_sigma[i];
+      if (i == 3 && k < 0) truth[i] = 0.02;  // the lag, kept physical (above)
+      const double ratio = SpeedUpFor(c, *ws, plan, usual, truth);
+      std::cout << "true " << c.sys.params()[static_cast<size_t>(i)].name << " at " << k
+                << " sigma: " << ratio << "x\n";
+      EXPECT_GE(ratio, 1.5) << c.sys.params()[static_cast<size_t>(i)].name << " at " << k;
+    }
+  }
 }
 
 TEST(Plan, UnicycleWithALagAndATricycle) {
