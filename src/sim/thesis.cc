@@ -149,6 +149,9 @@ ThesisOptions ThesisOptions::Realistic() {
   o.wheel.command_step_rad_s = 0.1;  // §7.3.2
   o.wheel.max_rad_s = 48.0;          // above the fastest command of Table 6-4 (47.2)
   o.stamp_step_s = 0.01;             // a 10 ms timer tick
+  // The camera's own calibration error, calibrated anew each day of ten runs (issue 34).
+  o.pixel.calibration.enabled = true;
+  o.pixel.calibration.runs_per_day = 10;
   return o;
 }
 

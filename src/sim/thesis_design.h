@@ -10,6 +10,7 @@
 #include "kincal/estimation/batch.h"
 #include "kincal/sim/thesis.h"
 #include "kincal/sim/thesis_vision.h"
+#include "sim/calibration_day.h"
 
 namespace kincal {
 
@@ -28,6 +29,14 @@ struct PoseErrorStats {
 };
 
 struct ThesisDesign {
+  // Each experiment day's floor map against the truth (the camera's calibration error),
+  // the scale's 1-sigma the calibration gives, and the day's share of the runs.
+  struct CameraDay {
+    FloorMapError error;
+    double scale_sigma = 0.0;
+    int runs = 0;
+  };
+  std::vector<CameraDay> days;
   ControlSignal controls{2, 0};  // requested: what the estimators see
   ControlSignal realised{2, 0};  // what the wheels did
   std::vector<ThesisRun> runs;

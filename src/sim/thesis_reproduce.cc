@@ -81,9 +81,13 @@ class JointTally {
  public:
   explicit JointTally(const Eigen::Vector3d& truth) : truth_(truth) {}
   void SetTruth(const Eigen::Vector3d& truth) { truth_ = truth; }
+  // The variance of the lengths' common scale the poses carry (the camera's calibration:
+  // a pose scale s makes every length (1 + s) times its own), added to every estimate's
+  // covariance as s^2 a a' (a consider covariance: not estimated, but not ignored).
+  void SetScaleVariance(double v) { scale_variance_ = v; }
   void Record(const std::string& name, const Estimate& e, ThesisResult* res) {
     const Eigen::Vector3d est = e.params.head(3);
-    const Eigen::Matrix3d cov = e.cov.topLeftCorner(3, 3);
+    const Eigen::Matrix3d cov = e.cov.topLeftCorner(3, 3) + scale_variance_ * est * est.transpose();
     const double nnde = Nnde(est, truth_);
     sq_[name] += nnde * nnde;
     res->joint_trial_nnde[name].push_back(nnde);
@@ -104,6 +108,7 @@ class JointTally {
 
  private:
   Eigen::Vector3d truth_;
+  double scale_variance_ = 0.0;
   std::map<std::string, double> sq_, nees_;
   std::map<std::string, int> inside_;
 };
@@ -244,6 +249,43 @@ void AddPoseErrors(const PoseErrorStats& trial, PoseErrorStats* sum) {
   sum->sum_nees += trial.sum_nees;
 }
 
+// The variance of the scale all runs' poses share: each day's calibration gives its
+// floor's scale sigma; the joint estimate weighs each day by its share of the runs.
+double PoseScaleVariance(const ThesisDesign& d) {
+  double total = 0.0, v = 0.0;
+  for (const auto& day : d.days) total += day.runs;
+  for (const auto& day : d.days) v += std::pow(day.runs / total * day.scale_sigma, 2);
+  return total > 0.0 ? v : 0.0;
+}
+
+// The idealised world's pose covariance: four markers at the corners of a 60 x 100 mm
+// rectangle on the 80 x 120 mm plate, origin at their centroid, seen by the nadir camera.
+Eigen::Matrix3d IdealPoseCovariance(const ThesisOptions& o) {
+  const double focal_px = 0.5 * o.image_width_px / std::tan(0.5 * o.hfov_rad);
+  const std::vector<Eigen::Vector2d> markers = {
+      {0.05, 0.03}, {0.05, -0.03}, {-0.05, -0.03}, {-0.05, 0.03}};
+  return PlanarPoseCovariance(o.camera_height_m, focal_px, markers, o.centroid_sigma_px);
+}
+
+// A trial's camera days: their scale variance into the joint tally (a consider
+// covariance), their floor maps into the result.
+void AddCameraDays(const ThesisDesign& d, JointTally* joint, ThesisResult* res) {
+  joint->SetScaleVariance(PoseScaleVariance(d));
+  for (const auto& day : d.days) {
+    ++res->camera_days;
+    res->camera_scale_rms += day.error.scale * day.error.scale;
+    res->camera_bend_rms_m += day.error.rms_m * day.error.rms_m;
+    res->camera_scale_sigma_rms += day.scale_sigma * day.scale_sigma;
+  }
+}
+
+void FinishCameraDays(ThesisResult* res) {
+  if (res->camera_days == 0) return;
+  res->camera_scale_rms = std::sqrt(res->camera_scale_rms / res->camera_days);
+  res->camera_bend_rms_m = std::sqrt(res->camera_bend_rms_m / res->camera_days);
+  res->camera_scale_sigma_rms = std::sqrt(res->camera_scale_sigma_rms / res->camera_days);
+}
+
 void FinishPoses(const PoseErrorStats& poses, ThesisResult* res) {
   const int measured = poses.frames - poses.lost - poses.gross;
   res->frames_lost = poses.lost;
@@ -261,13 +303,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
   if (!o.IsValid(&error)) throw std::invalid_argument("thesis: " + error);
   const System sys = MakeSystem("diffdrive").value();
   const Eigen::Vector3d nominal(kThesisRL, kThesisRR, kThesisD);
-  const double focal_px = 0.5 * o.image_width_px / std::tan(0.5 * o.hfov_rad);
-  // Four markers at the corners of a 60 x 100 mm rectangle on the 80 x 120 mm plate,
-  // origin at their centroid.
-  const std::vector<Eigen::Vector2d> markers = {
-      {0.05, 0.03}, {0.05, -0.03}, {-0.05, -0.03}, {-0.05, 0.03}};
-  const Eigen::Matrix3d R =
-      PlanarPoseCovariance(o.camera_height_m, focal_px, markers, o.centroid_sigma_px);
+  const Eigen::Matrix3d R = IdealPoseCovariance(o);
 
   ThesisResult res;
   res.runs = o.runs;
@@ -280,7 +316,9 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
   std::normal_distribution<double> gauss(0.0, 1.0);
   std::unique_ptr<PixelPoseMeter> meter;
   if (o.pixels) {
-    meter = std::make_unique<PixelPoseMeter>(ThesisTable63Vision(), o.pixel, rng);
+    PixelPoseOptions po = o.pixel;
+    po.calibration.seed = o.seed ^ 0x5eed0ca11b4a7e5ULL;  // the days' stream, from the world's seed
+    meter = std::make_unique<PixelPoseMeter>(ThesisTable63Vision(), po, rng);
     res.image_noise_grey = meter->image_noise_grey();
     res.centroid_sigma_px = meter->measured_centroid_sigma_px();
   }
@@ -309,6 +347,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
     res.duration_s = 0.0;
     for (const auto& run : d.runs) res.duration_s += NsToSeconds(run.t1 - run.t0);
     AddPoseErrors(d.pose_errors, &poses);
+    AddCameraDays(d, &joint, &res);
 
     const double gate = o.pixels ? kPixelGateNis : 0.0;
     for (const auto& f : o.filters) {
@@ -334,6 +373,7 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
   res.joint_gains_bound_nnde_percent = 100.0 * std::sqrt(gains_bound_sq / o.trials);
   FinishPerRun(per_run, o, &res);
   FinishPoses(poses, &res);
+  FinishCameraDays(&res);
   return res;
 }
 

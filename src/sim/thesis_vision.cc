@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "kincal/vision/floor_pose_solver.h"
+#include "sim/calibration_day.h"
 
 namespace kincal {
 namespace {
@@ -99,7 +100,19 @@ bool PlateInView(const ThesisVision& v, const Eigen::Vector3d& pose, double marg
   return true;
 }
 
+bool CameraCalibrationErrors::IsValid(std::string* error) const {
+  if (runs_per_day < 1 || board_cols < 3 || board_rows < 3 || !(board_pitch_m > 0.0) ||
+      !(tilt_rad > 0.0 && tilt_rad < 1.2)) {
+    *error =
+        "pixel.calibration: runs_per_day >= 1, a board of at least 3 x 3 markers, a positive "
+        "pitch and tilt_rad in (0, 1.2) expected";
+    return false;
+  }
+  return true;
+}
+
 bool PixelPoseOptions::IsValid(std::string* error) const {
+  if (!calibration.IsValid(error)) return false;
   if (!(centroid_sigma_px > 0.0 && centroid_sigma_px < 2.0) ||
       !(blur_sigma_px >= 0.0 && blur_sigma_px < 5.0) || calibration_frames < 8 || supersample < 1 ||
       supersample > 16) {
@@ -114,7 +127,9 @@ bool PixelPoseOptions::IsValid(std::string* error) const {
 PixelPoseMeter::PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& options,
                                std::mt19937_64& rng)
     : vision_(std::move(vision)),
+      calibrated_(vision_),
       options_(options),
+      day_rng_(options.calibration.seed),
       tracker_(vision_.camera, vision_.layout, vision::DetectorOptions{}) {
   std::string error;
   if (!options.IsValid(&error)) throw std::invalid_argument(error);
@@ -208,6 +223,15 @@ double PixelPoseMeter::CentreScatter(double noise_grey, std::mt19937_64& rng) {
   return dof > 0 ? std::sqrt(ss / dof) : 0.0;
 }
 
+void PixelPoseMeter::BeginDay() {
+  if (options_.calibration.enabled) {
+    CalibratedDay day =
+        CalibrateDay(vision_, options_.calibration, options_.centroid_sigma_px, day_rng_);
+    calibrated_ = std::move(day.vision);
+    scale_sigma_ = day.scale_sigma;
+  }
+}
+
 bool PixelPoseMeter::Solve(const std::vector<vision::Marker>& markers, vision::PlanarPose* out) {
   // On the floor through the plate's known height, not its solved depth: the depth of
   // four close markers seen from 1.7 m is biased at this noise (a scale of every
@@ -217,8 +241,8 @@ bool PixelPoseMeter::Solve(const std::vector<vision::Marker>& markers, vision::P
   o.method = vision::FloorPoseMethod::kLowe;
   o.sigma_px = options_.centroid_sigma_px;
   o.max_chi2 = kMaxFitChi2;
-  vision::FloorPoseSolver solver(vision_.camera, vision_.floor, vision_.layout,
-                                 vision_.target_height_m, o);
+  vision::FloorPoseSolver solver(calibrated_.camera, calibrated_.floor, calibrated_.layout,
+                                 calibrated_.target_height_m, o);
   return solver.Solve(markers, nullptr, out);
 }
 
@@ -234,9 +258,9 @@ bool PixelPoseMeter::Measure(const Eigen::Vector3d& pose, std::mt19937_64& rng, 
   // The image of a marker's centre is not the centre of its image: correct at the solved
   // pose and solve again, as kincald's pose stage does.
   vision::CorrectPerspectiveBias(
-      vision_.camera,
-      vision::CameraPoseOnFloor(vision_.floor, solved.xytheta, vision_.target_height_m),
-      vision_.layout, &markers);
+      calibrated_.camera,
+      vision::CameraPoseOnFloor(calibrated_.floor, solved.xytheta, calibrated_.target_height_m),
+      calibrated_.layout, &markers);
   if (!Solve(markers, &solved)) return false;
   *z = solved.xytheta;
   *R = solved.covariance;

@@ -158,6 +158,12 @@ TEST(Thesis, TableStatistics) {
 // plate's known height and the tick's second-order term was taken out, the NEES was
 // about 8 over trials and a third of the errors fell outside.) The per-run turn-rate
 // scatter is Table 6-5's (the tuned value).
+// Issue 34: the camera calibrated anew each day of ten runs (its own error drawn from the
+// calibration itself). The poses' NEES is judged against what the day's calibration makes
+// of the truth (its noise, not its calibration, is the solver's to state); the joint
+// calibration takes the days' scale sigma as a consider covariance and stays honest; the
+// speed scatter, which no wheel error can raise (docs/thesis.md, Tuning), rises from the
+// 0.035 % of the world without it towards Table 6-5's 0.256 %.
 TEST(ThesisRealistic, JointDd2WithNuisanceGainsReachesTargetHonestly) {
   ThesisOptions o = ThesisOptions::Realistic();
   o.seed = 18;
@@ -166,6 +172,8 @@ TEST(ThesisRealistic, JointDd2WithNuisanceGainsReachesTargetHonestly) {
   const ThesisResult r = ReproduceThesis(o);
   const double dd2 = r.joint_nnde_percent.at("dd2"), gains = r.joint_nnde_percent.at("dd2+gains");
   const TableStats& s = r.per_run_stats.at("dd2");
+  std::cout << "camera days " << r.camera_days << ", floor scale " << 100 * r.camera_scale_rms
+            << " % RMS (claimed " << 100 * r.camera_scale_sigma_rms << " %); ";
   std::cout << "pose NEES " << r.pose_nees << ", " << r.frames_lost << " of "
             << r.frames + r.frames_lost << " frames lost; joint DD2 bare " << dd2 << " % (NEES "
             << r.joint_nees.at("dd2") << "), with gains " << gains << " % (NEES "
@@ -181,6 +189,10 @@ TEST(ThesisRealistic, JointDd2WithNuisanceGainsReachesTargetHonestly) {
   EXPECT_GT(r.joint_nees.at("dd2"), 100.0);  // the bare model claims too much
   EXPECT_GT(s.turn_scatter, 0.5 * 0.00072);
   EXPECT_LT(s.turn_scatter, 2.0 * 0.00072);
+  EXPECT_EQ(r.camera_days, 10);
+  EXPECT_GT(r.camera_scale_rms, 2e-4);
+  EXPECT_GT(s.speed_scatter, 2.0 * 0.00035);
+  EXPECT_LT(s.speed_scatter, 0.00256);
 }
 
 }  // namespace
