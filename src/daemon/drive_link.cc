@@ -63,6 +63,7 @@ Status DriveLink::Plan(const Checkpoint& estimate, const Eigen::Vector3d& pose,
   g.options.control_rate_hz = control_rate_hz;
   g.options.start = pose;
   g.options.seed_with_usual = false;  // a leg every few seconds: the greedy design alone
+  g.options.refine_passes = 0;
   Motion plan;
   const Status s = PlanMotion(*g.sys, g.params, estimate.covariance, *view_, g.options, &plan);
   if (!s.ok()) return s;

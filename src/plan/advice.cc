@@ -71,6 +71,7 @@ double TimeToTargets(const System& sys, const Eigen::VectorXd& p, Eigen::MatrixX
   o.duration_s = kPredictChunkS;
   o.prior_sigmas = 0.0;       // nothing to keep in view on an open floor
   o.seed_with_usual = false;  // "greedy plans", as the advice says
+  o.refine_passes = 0;
   for (double done = 0.0; done < kMaxPredictS; done += kPredictChunkS) {
     Motion m;
     if (!PlanMotion(sys, p, cov, *floor, o, &m).ok()) break;

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "kincal/angles.h"
+#include "plan/refine.h"
 #include "plan/shaping.h"
 
 namespace kincal {
@@ -111,6 +112,7 @@ struct Trial {
   ControlSignal u;
   Values end;
   DesignInformation info;
+  Values value;  // the segment's control
 };
 
 // Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
@@ -134,7 +136,7 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
   DesignInformation info = info0;
   info.Advance(t1, u);
   const double score = DesignScore(info.Covariance(), prior_sigma, o);
-  return Trial{score, std::move(u), at, std::move(info)};
+  return Trial{score, std::move(u), at, std::move(info), cand};
 }
 
 // The fleet at the start pose, at rest.
@@ -158,6 +160,18 @@ bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
   return CornersInside(sys, ws, fleet) &&
          DriveFleet(sys, u, ws, end_s, kCheckS, true, &fleet, CornersInside);
 }
+
+namespace plan_internal {
+
+bool FleetStaysInside(const System& sys, const Eigen::VectorXd& params,
+                      const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
+                      const ControlSignal& u) {
+  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
+  const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
+  return FleetInside(sys, ws, fleet) && DriveFleet(sys, u, ws, end_s, kCheckS, true, &fleet);
+}
+
+}  // namespace plan_internal
 
 namespace {
 
@@ -218,8 +232,10 @@ bool ValidLimits(const PlanOptions& o, const System& sys, std::string* error) {
 
 bool ValidDesign(const PlanOptions& o, const System& sys, std::string* error) {
   if (!(o.max_curvature >= 0.0) || o.levels < 3 || o.levels % 2 == 0 || o.levels > 9 ||
-      !(o.prior_sigmas >= 0.0)) {
-    *error = "curvature >= 0, an odd number of levels in 3..9 and prior_sigmas >= 0 expected";
+      !(o.prior_sigmas >= 0.0) || o.refine_passes < 0 || o.refine_passes > 10) {
+    *error =
+        "curvature >= 0, an odd number of levels in 3..9, prior_sigmas >= 0 and refine_passes "
+        "in 0..10 expected";
     return false;
   }
   for (int i : o.care) {
@@ -408,6 +424,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                          " s before the stop (" + std::to_string(stop_s) +
                          " s from the speed limits at the acceleration limits)");
   }
+  std::vector<Values> chosen;
   for (int s = 0; s < segments; ++s) {
     const double t0 = s * o.segment_s;
     std::optional<Trial> best;
@@ -422,6 +439,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                            " s; widen the workspace or lower the speed limits");
     }
     plan->controls = std::move(best->u);
+    chosen.push_back(best->value);
     now = best->end;
     info = std::move(best->info);
     // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
@@ -431,6 +449,10 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                false, &fleet);
   }
   plan_internal::AppendStopAndRest(&plan->controls, segments * o.segment_s, o.duration_s, o, &now);
+  if (o.refine_passes > 0 && plan_internal::RefineSegments(sys, params, prior_cov, ws, o, grid,
+                                                           o.refine_passes, &chosen) > 0) {
+    plan->controls = plan_internal::ControlsOfSegments(chosen, o, sys.num_controls());
+  }
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
   if (o.seed_with_usual) {
     std::vector<Motion> compared;

@@ -55,6 +55,9 @@ struct PlanOptions {
   // It costs the usual motions' evaluation (about a second for 60 s); kincald's guidance,
   // which plans short legs again and again, does without.
   bool seed_with_usual = true;
+  // Looking ahead: with targets, the greedy plan's segments before the targets are reached
+  // are revisited this many times (src/plan/refine.h); 0: the greedy plan as it is.
+  int refine_passes = 3;
   bool IsValid(const System& sys, std::string* error) const;
 };
 
