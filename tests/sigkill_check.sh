@@ -23,10 +23,10 @@ wait "$pid" 2>/dev/null || true
 import json, os, sys
 sys.path.insert(0, sys.argv[1])
 import lcm
-from kincal import controls_t, frame_t, health_t, markers_t, model_check_t, params_t, pose_t
+from kincal import controls_t, frame_t, health_t, markers_t, model_check_t, params_t, pose_t, truth_t
 types = {"KINCAL_CONTROLS": controls_t, "KINCAL_FRAME": frame_t, "KINCAL_POSE": pose_t,
          "KINCAL_PARAMS": params_t, "KINCAL_HEALTH": health_t, "KINCAL_MODEL_CHECK": model_check_t,
-         "KINCAL_MARKERS": markers_t}
+         "KINCAL_MARKERS": markers_t, "KINCAL_TRUTH": truth_t}
 path = sys.argv[2]
 size = os.path.getsize(path)
 counts, end = {}, 0
