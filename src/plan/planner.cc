@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "kincal/angles.h"
+#include "plan/fleet.h"
 #include "plan/refine.h"
 #include "plan/shaping.h"
 
@@ -14,93 +15,13 @@ namespace {
 
 using plan_internal::Values;
 
-constexpr double kNonlinearMargin = 1.2;
-constexpr double kCheckS = 0.05;      // how often the fleet is checked (s)
+using plan_internal::DriveFleet;
+using plan_internal::Fleet;
+using plan_internal::FleetAtStart;
+using plan_internal::kFleetCheckS;
+
 constexpr double kSettleS = 3.0;      // a stop is followed this long beyond its slewing (s)
 constexpr double kAnticipateS = 1.0;  // the most negative delay driven exactly (s)
-
-// The robots that must stay in: the design point and +-k sigma along each principal axis
-// of the prior.
-std::vector<Eigen::VectorXd> RobotsWithinPrior(const Eigen::VectorXd& params,
-                                               const Eigen::MatrixXd& prior_cov, double k) {
-  std::vector<Eigen::VectorXd> out = {params};
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(prior_cov);
-  for (Eigen::Index i = 0; i < params.size(); ++i) {
-    const Eigen::VectorXd d =
-        k * std::sqrt(std::max(eig.eigenvalues()[i], 0.0)) * eig.eigenvectors().col(i);
-    out.push_back(params + d);
-    out.push_back(params - d);
-  }
-  return out;
-}
-
-// Robot states driven along the plan, for the stay-in check: the design point, then the
-// robots at + and - k sigma along each principal axis of the prior, in pairs.
-struct Fleet {
-  std::vector<StateVec> x;
-  double t_s = 0.0;
-};
-
-// Whether every robot within the k-sigma ellipsoid of the prior keeps its target inside.
-// The axis robots are checked as they are (nonlinear); the ellipsoid between them through
-// the pose's spread they imply: half the difference of each pair is the pose's change
-// along that axis, so the poses within the ellipsoid fill, to first order, the ellipsoid
-// of covariance D D' about the nominal pose; its six extreme points, pushed a fifth
-// further out for what the first order misses over a long open-loop run, are checked too.
-bool FleetInside(const System& sys, const Workspace& ws, const Fleet& f) {
-  Eigen::Vector3d z0;
-  sys.Measure(f.x[0].data(), z0.data());
-  if (!ws.Contains(z0)) return false;
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (size_t k = 1; k + 1 < f.x.size(); k += 2) {
-    Eigen::Vector3d zp, zm;
-    sys.Measure(f.x[k].data(), zp.data());
-    sys.Measure(f.x[k + 1].data(), zm.data());
-    if (!ws.Contains(zp) || !ws.Contains(zm)) return false;
-    Eigen::Vector3d d = 0.5 * (zp - zm);
-    d.z() = WrapAngle(d.z());
-    cov += d * d.transpose();
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
-  for (int i = 0; i < 3; ++i) {
-    const Eigen::Vector3d a = kNonlinearMargin * std::sqrt(std::max(eig.eigenvalues()[i], 0.0)) *
-                              eig.eigenvectors().col(i);
-    if (!ws.Contains(z0 + a) || !ws.Contains(z0 - a)) return false;
-  }
-  return true;
-}
-
-// Whether every robot of the fleet (the design point and the axis robots) keeps its
-// target inside, without the poses between them.
-bool CornersInside(const System& sys, const Workspace& ws, const Fleet& f) {
-  for (const auto& x : f.x) {
-    Eigen::Vector3d z;
-    sys.Measure(x.data(), z.data());
-    if (!ws.Contains(z)) return false;
-  }
-  return true;
-}
-
-using FleetCheck = bool (*)(const System&, const Workspace&, const Fleet&);
-
-// Drives the fleet to t1, checking every `check_s` with `inside`; false if any target left
-// (with `stop_early`, as soon as one does, leaving the fleet there).
-bool DriveFleet(const System& sys, const ControlSignal& u, const Workspace& ws, double t1,
-                double check_s, bool stop_early, Fleet* f, FleetCheck inside_check = FleetInside) {
-  bool inside = true;
-  while (f->t_s < t1 - 1e-12) {
-    const double t = std::min(t1, f->t_s + check_s);
-    for (auto& x : f->x) {
-      sys.Propagate(x.data(), x.data(), f->t_s, t, u, static_cast<const double*>(nullptr));
-    }
-    f->t_s = t;
-    if (!inside_check(sys, ws, *f)) {
-      inside = false;
-      if (stop_early) return false;
-    }
-  }
-  return inside;
-}
 
 Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
   return prior_cov.diagonal().cwiseSqrt();
@@ -132,22 +53,11 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
   const double settle = t1 + o.segment_s + kSettleS;
   plan_internal::AppendSlewed(&braked, t1, settle, Values{}, o, &b);
   Fleet fleet = fleet0;
-  if (!DriveFleet(sys, braked, ws, settle, kCheckS, true, &fleet)) return std::nullopt;
+  if (!DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet)) return std::nullopt;
   DesignInformation info = info0;
   info.Advance(t1, u);
   const double score = DesignScore(info.Covariance(), prior_sigma, o);
   return Trial{score, std::move(u), at, std::move(info), cand};
-}
-
-// The fleet at the start pose, at rest.
-Fleet FleetAtStart(const System& sys, const Eigen::VectorXd& params,
-                   const Eigen::MatrixXd& prior_cov, const Eigen::Vector3d& start,
-                   const PlanOptions& o, const ControlSignal& u) {
-  Fleet fleet;
-  for (const auto& p : RobotsWithinPrior(params, prior_cov, o.prior_sigmas)) {
-    fleet.x.push_back(sys.MakeState(start.x(), start.y(), start.z(), p, u, 0.0));
-  }
-  return fleet;
 }
 
 }  // namespace
@@ -155,23 +65,9 @@ Fleet FleetAtStart(const System& sys, const Eigen::VectorXd& params,
 bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
                        const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                        const ControlSignal& u) {
-  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
-  const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
-  return CornersInside(sys, ws, fleet) &&
-         DriveFleet(sys, u, ws, end_s, kCheckS, true, &fleet, CornersInside);
+  return plan_internal::FleetStaysInside(sys, params, prior_cov, ws, o, u,
+                                         plan_internal::CornersInside);
 }
-
-namespace plan_internal {
-
-bool FleetStaysInside(const System& sys, const Eigen::VectorXd& params,
-                      const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
-                      const ControlSignal& u) {
-  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
-  const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
-  return FleetInside(sys, ws, fleet) && DriveFleet(sys, u, ws, end_s, kCheckS, true, &fleet);
-}
-
-}  // namespace plan_internal
 
 namespace {
 
@@ -445,8 +341,8 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
     // camera clock behind the robot's) moves by commands not yet chosen, and is driven
     // through them only when they are.
-    DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS), kCheckS,
-               false, &fleet);
+    DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS),
+               kFleetCheckS, false, &fleet);
   }
   plan_internal::AppendStopAndRest(&plan->controls, segments * o.segment_s, o.duration_s, o, &now);
   if (o.refine_passes > 0 && plan_internal::RefineSegments(sys, params, prior_cov, ws, o, grid,

@@ -2,9 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "kincal/plan/design_information.h"
+#include "plan/fleet.h"
 
 namespace kincal::plan_internal {
 namespace {

@@ -17,13 +17,6 @@ namespace kincal::plan_internal {
 ControlSignal ControlsOfSegments(const std::vector<Values>& segments, const PlanOptions& o,
                                  int num_controls);
 
-// The planner's own rule for a whole motion (stricter than EveryRobotStaysIn): the prior's
-// corner robots and the poses of its ellipsoid between them, pushed a fifth further out,
-// keep their targets inside to u's last sample (src/plan/planner.cc).
-bool FleetStaysInside(const System& sys, const Eigen::VectorXd& params,
-                      const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
-                      const ControlSignal& u);
-
 // With targets: passes over the segments before the time the targets are reached, each
 // segment tried at every value of `grid`; a change is kept when it lowers the largest
 // sigma-over-target at that time and every robot within the prior still keeps inside
