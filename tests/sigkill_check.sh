@@ -19,20 +19,19 @@ for _ in $(seq 600); do
 done
 kill -KILL "$pid"
 wait "$pid" 2>/dev/null || true
-"$python" - "$types" "$work/killed.lcm" "$work/ck.json" <<'PY'
+"$python" - "$types" "$work/killed.lcm" "$work/ck.json" "$(dirname "$0")/../scripts" <<'PY'
 import json, os, sys
 sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[4])
 import lcm
-from kincal import controls_t, frame_t, health_t, markers_t, model_check_t, params_t, pose_t, truth_t
-types = {"KINCAL_CONTROLS": controls_t, "KINCAL_FRAME": frame_t, "KINCAL_POSE": pose_t,
-         "KINCAL_PARAMS": params_t, "KINCAL_HEALTH": health_t, "KINCAL_MODEL_CHECK": model_check_t,
-         "KINCAL_MARKERS": markers_t, "KINCAL_TRUTH": truth_t}
+from kincal_lcm_types import message_types
+types = message_types()  # every kincal message by its LCM fingerprint, whatever its channel
 path = sys.argv[2]
 size = os.path.getsize(path)
 counts, end = {}, 0
 log = lcm.EventLog(path, "r")
 for ev in log:
-    types[ev.channel].decode(ev.data)  # raises if not whole
+    types[bytes(ev.data[:8])].decode(ev.data)  # raises if not whole, or not a kincal message
     counts[ev.channel] = counts.get(ev.channel, 0) + 1
     end = log.tell()
 frame_bytes = 640 * 480 + 200
