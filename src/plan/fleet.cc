@@ -98,7 +98,6 @@ Fleet FleetAtStart(const System& sys, const Eigen::VectorXd& params,
   return fleet;
 }
 
-
 bool FleetStaysInside(const System& sys, const Eigen::VectorXd& params,
                       const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                       const ControlSignal& u, FleetCheck inside_check) {
