@@ -55,18 +55,18 @@ int RefineSegments(const System& sys, const Eigen::VectorXd& params,
   const int nc = sys.num_controls();
   const Eigen::Vector3d start = StartPose(ws, o);
   int kept = 0;
+  ControlSignal u = ControlsOfSegments(*segments, o, nc);  // the segments' controls, kept current
   for (int pass = 0; pass < passes; ++pass) {
-    const double horizon =
-        TimeToTargets(sys, params, prior_cov, ws, o, ControlsOfSegments(*segments, o, nc));
+    const double horizon = TimeToTargets(sys, params, prior_cov, ws, o, u);
     const size_t reach =
         std::min(segments->size(), static_cast<size_t>(std::ceil(horizon / o.segment_s - 1e-9)));
     // The information up to segment k's start: the same for every value tried there.
     DesignInformation before(sys, params, prior_cov, o.info);
-    before.StartSegment(start, 0.0, ControlsOfSegments(*segments, o, nc));
-    double current = WorstRatioAt(sys, before, o, ControlsOfSegments(*segments, o, nc), horizon);
+    before.StartSegment(start, 0.0, u);
+    double current = WorstRatioAt(sys, before, o, u, horizon);
     int changed = 0;
     for (size_t k = 0; k < reach; ++k) {
-      before.Advance(static_cast<double>(k) * o.segment_s, ControlsOfSegments(*segments, o, nc));
+      before.Advance(static_cast<double>(k) * o.segment_s, u);
       // Every value at segment k, best first; the best that keeps every robot inside is kept.
       std::vector<std::pair<double, size_t>> tried;
       for (size_t c = 0; c < grid.size(); ++c) {
@@ -80,11 +80,11 @@ int RefineSegments(const System& sys, const Eigen::VectorXd& params,
       for (const auto& [r, c] : tried) {
         std::vector<Values> trial = *segments;
         trial[k] = grid[c];
-        if (!FleetStaysInside(sys, params, prior_cov, ws, o, ControlsOfSegments(trial, o, nc))) {
-          continue;
-        }
+        ControlSignal trial_u = ControlsOfSegments(trial, o, nc);
+        if (!FleetStaysInside(sys, params, prior_cov, ws, o, trial_u)) continue;
         current = r;
         *segments = std::move(trial);
+        u = std::move(trial_u);
         ++changed;
         break;
       }
