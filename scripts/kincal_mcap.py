@@ -112,6 +112,13 @@ def annotations(m, scale=1, axes=None):
     return ImageAnnotations(circles=circles, points=points, texts=texts)
 
 
+def floor_pose(m):
+    """A message's planar pose (its utime, x, y, theta) as a PoseInFrame in frame "floor"."""
+    from foxglove.messages import Pose, PoseInFrame, Vector3
+    return PoseInFrame(timestamp=timestamp(m.utime), frame_id="floor",
+                       pose=Pose(position=Vector3(x=m.x, y=m.y, z=0.0), orientation=quaternion(m.theta)))
+
+
 def quaternion(theta):
     from foxglove.messages import Quaternion
     return Quaternion(x=0.0, y=0.0, z=math.sin(theta / 2), w=math.cos(theta / 2))
@@ -198,24 +205,17 @@ class Exporter:
         self.log("/" + channel, "ImageAnnotations", annotations(m), log_time)
 
     def on_truth_t(self, channel, m, log_time):
-        from foxglove.messages import Pose, PoseInFrame, Vector3
         self.on_json(channel, m, log_time)
         if m.on_floor:
-            self.log("/" + channel + "/pose", "PoseInFrame",
-                     PoseInFrame(timestamp=timestamp(m.utime), frame_id="floor",
-                                 pose=Pose(position=Vector3(x=m.x, y=m.y, z=0.0), orientation=quaternion(m.theta))),
-                     log_time)
+            self.log("/" + channel + "/pose", "PoseInFrame", floor_pose(m), log_time)
 
     def on_pose_t(self, channel, m, log_time):
-        from foxglove.messages import FrameTransform, Pose, PoseInFrame, Vector3
+        from foxglove.messages import FrameTransform, Vector3
         if not m.valid:
             self.log("/" + channel + "/invalid", "json", fields(m), log_time, "kincal.pose_t")
             return
         ts = timestamp(m.utime)
-        self.log("/" + channel, "PoseInFrame",
-                 PoseInFrame(timestamp=ts, frame_id="floor",
-                             pose=Pose(position=Vector3(x=m.x, y=m.y, z=0.0), orientation=quaternion(m.theta))),
-                 log_time)
+        self.log("/" + channel, "PoseInFrame", floor_pose(m), log_time)
         self.log("/tf", "FrameTransform",
                  FrameTransform(timestamp=ts, parent_frame_id="floor", child_frame_id="robot",
                                 translation=Vector3(x=m.x, y=m.y, z=0.0), rotation=quaternion(m.theta)),
