@@ -112,6 +112,14 @@ class Timeline:
         while q and q[0][0] < now_us - self.history_us:
             q.popleft()
 
+    def _append_pose(self, q, utime, pose):
+        """A pose on the floor into q: live, the last POSES_KEPT within the history kept."""
+        q.append((utime, pose))
+        self._trim(q, utime)
+        if self.history_us is not None:
+            while len(q) > POSES_KEPT:
+                q.popleft()
+
     def _keep(self, kind, utime, item, keep=4):
         q = self.latest.setdefault(kind, collections.deque())
         q.append((utime, item))
@@ -176,21 +184,13 @@ class Timeline:
     def _on_pose_t(self, m, utime, _):
         if not m.valid:
             return
-        self.poses.append((utime, [m.x, m.y, m.theta]))
-        self._trim(self.poses, utime)
-        if self.history_us is not None:
-            while len(self.poses) > POSES_KEPT:
-                self.poses.popleft()
+        self._append_pose(self.poses, utime, [m.x, m.y, m.theta])
 
     def _on_truth_t(self, m, utime, _):
         self.truth_params = {str(n): float(v) for n, v in zip(m.names, m.values)}
         if not m.on_floor:
             return
-        self.truth.append((utime, [m.x, m.y]))
-        self._trim(self.truth, utime)
-        if self.history_us is not None:
-            while len(self.truth) > POSES_KEPT:
-                self.truth.popleft()
+        self._append_pose(self.truth, utime, [m.x, m.y])
 
     def _on_params_t(self, m, utime, _):
         self.params.append((utime, {"names": list(m.names), "units": list(m.units), "values": list(m.values),
