@@ -101,7 +101,10 @@ Fleet FleetAtStart(const System& sys, const Eigen::VectorXd& params,
 bool FleetStaysInside(const System& sys, const Eigen::VectorXd& params,
                       const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                       const ControlSignal& u, FleetCheck inside_check) {
-  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o, u);
+  // At rest at the start, as the planner's fleet starts (not with its effects' states at
+  // the first commands: a lag that had already caught up with them).
+  Fleet fleet = FleetAtStart(sys, params, prior_cov, StartPose(ws, o), o,
+                             ControlSignal(sys.num_controls(), 0));
   const double end_s = u.size() == 0 ? 0.0 : u.TimeAt(static_cast<int>(u.size()) - 1);
   return inside_check(sys, ws, fleet) &&
          DriveFleet(sys, u, ws, end_s, kFleetCheckS, true, &fleet, inside_check);
