@@ -7,7 +7,9 @@
 
 #include "kincal/angles.h"
 #include "plan/fleet.h"
+#include "plan/greedy.h"
 #include "plan/refine.h"
+#include "plan/seeding.h"
 #include "plan/shaping.h"
 
 namespace kincal {
@@ -15,49 +17,8 @@ namespace {
 
 using plan_internal::Values;
 
-using plan_internal::DriveFleet;
-using plan_internal::Fleet;
-using plan_internal::FleetAtStart;
-using plan_internal::kFleetCheckS;
-
-constexpr double kSettleS = 3.0;      // a stop is followed this long beyond its slewing (s)
-constexpr double kAnticipateS = 1.0;  // the most negative delay driven exactly (s)
-
 Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
   return prior_cov.diagonal().cwiseSqrt();
-}
-
-// One candidate driven for a segment: its controls, where they end, what is then known.
-struct Trial {
-  double score;
-  ControlSignal u;
-  Values end;
-  DesignInformation info;
-  Values value;  // the segment's control
-};
-
-// Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
-// within the prior would leave the workspace.
-std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
-                                  const Eigen::VectorXd& prior_sigma, const Values& cand, double t0,
-                                  const ControlSignal& u0, const Values& now,
-                                  const DesignInformation& info0, const Fleet& fleet0) {
-  ControlSignal u = u0;
-  Values at = now;
-  const double t1 = t0 + o.segment_s;
-  plan_internal::AppendSlewed(&u, t0, t1, cand, o, &at);
-  // The stop after it: until every robot within the prior has come to rest (a lag or a
-  // delay at the prior's 3 sigma keeps one moving for a while).
-  ControlSignal braked = u;
-  Values b = at;
-  const double settle = t1 + o.segment_s + kSettleS;
-  plan_internal::AppendSlewed(&braked, t1, settle, Values{}, o, &b);
-  Fleet fleet = fleet0;
-  if (!DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet)) return std::nullopt;
-  DesignInformation info = info0;
-  info.Advance(t1, u);
-  const double score = DesignScore(info.Covariance(), prior_sigma, o);
-  return Trial{score, std::move(u), at, std::move(info), cand};
 }
 
 }  // namespace
@@ -73,15 +34,12 @@ namespace {
 
 // The greedy plan, or the best continuous usual motion (one segment: the thesis's runs
 // carry the robot back between runs) that keeps every robot within the prior inside
-// (UsualMotions checked it), whichever ranks better. `usual` receives the usual motions.
-void KeepTheBetter(const System& sys, const Eigen::VectorXd& params,
-                   const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
-                   Motion* plan, std::vector<Motion>* usual) {
-  *usual = UsualMotions(sys, params, prior_cov, ws, o);
-  const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
+// (UsualMotions checked it), whichever ranks better.
+void KeepTheBetter(const PlanOptions& o, const Eigen::VectorXd& prior_sigma,
+                   const std::vector<Motion>& usual, Motion* plan) {
   double best = MotionRank(*plan, o, prior_sigma);
   const Motion* better = nullptr;
-  for (const Motion& m : *usual) {
+  for (const Motion& m : usual) {
     if (m.segment_starts_s.size() != 1 || !m.stays_in || !m.every_robot_stays_in) continue;
     const double rank = MotionRank(m, o, prior_sigma);
     if (rank < best) {
@@ -298,19 +256,12 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                   Motion* plan, std::vector<Motion>* usual) {
   std::string error;
   if (!o.IsValid(sys, &error)) return Status::Error("plan: " + error);
-  const Eigen::Vector3d start = StartPose(ws, o);
-  plan->name = "plan";
-  plan->controls = ControlSignal(sys.num_controls(), 0);
-  plan->segment_starts_s = {0.0};
-  DesignInformation info(sys, params, prior_cov, o.info);
-  info.StartSegment(start, 0.0, plan->controls);
-  Fleet fleet = FleetAtStart(sys, params, prior_cov, start, o, plan->controls);
-  if (!ws.Contains(info.MeasuredPose())) {
+  plan_internal::Design d = plan_internal::DesignAtStart(sys, params, prior_cov, ws, o);
+  if (!ws.Contains(d.info.MeasuredPose())) {
     return Status::Error("plan: the target at the start pose is outside the " + ws.Describe());
   }
   const std::vector<Values> grid = CandidateControls(sys, params, o);
   const Eigen::VectorXd prior_sigma = PriorSigma(prior_cov);
-  Values now{};
   // Whole segments, then the stop: at rest by duration_s whatever the last segment drove.
   const double stop_s = plan_internal::LongestStopSeconds(o, sys.num_controls());
   const int segments = static_cast<int>(std::floor((o.duration_s - stop_s) / o.segment_s + 1e-9));
@@ -320,39 +271,33 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                          " s before the stop (" + std::to_string(stop_s) +
                          " s from the speed limits at the acceleration limits)");
   }
-  std::vector<Values> chosen;
-  for (int s = 0; s < segments; ++s) {
-    const double t0 = s * o.segment_s;
-    std::optional<Trial> best;
-    for (const Values& cand : grid) {
-      std::optional<Trial> t =
-          TryCandidate(sys, ws, o, prior_sigma, cand, t0, plan->controls, now, info, fleet);
-      if (t && (!best || t->score < best->score)) best = std::move(t);
-    }
-    if (!best) {
-      return Status::Error("plan: no control keeps every robot within the prior inside the " +
-                           ws.Describe() + " after " + std::to_string(t0) +
-                           " s; widen the workspace or lower the speed limits");
-    }
-    plan->controls = std::move(best->u);
-    chosen.push_back(best->value);
-    now = best->end;
-    info = std::move(best->info);
-    // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
-    // camera clock behind the robot's) moves by commands not yet chosen, and is driven
-    // through them only when they are.
-    DriveFleet(sys, plan->controls, ws, std::max(0.0, t0 + o.segment_s - kAnticipateS),
-               kFleetCheckS, false, &fleet);
+  // With targets, designed up to them first (and sooner, DesignSoonest), then on.
+  const bool targets = o.targets.size() > 0;
+  bool ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma, segments, targets, &d);
+  if (ok && targets && o.refine_passes > 0 &&
+      plan_internal::WorstTargetRatio(d.info.Covariance(), o) <= 1.0) {
+    plan_internal::DesignSoonest(sys, params, prior_cov, ws, o, grid, &d);
   }
-  plan_internal::AppendStopAndRest(&plan->controls, segments * o.segment_s, o.duration_s, o, &now);
-  if (o.refine_passes > 0 && plan_internal::RefineSegments(sys, params, prior_cov, ws, o, grid,
-                                                           o.refine_passes, &chosen) > 0) {
-    plan->controls = plan_internal::ControlsOfSegments(chosen, o, sys.num_controls());
+  if (ok && targets) {
+    ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma,
+                                       segments - static_cast<int>(d.chosen.size()), false, &d);
   }
+  if (!ok) {
+    return Status::Error("plan: no control keeps every robot within the prior inside the " +
+                         ws.Describe() + " after " + std::to_string(d.t_s) +
+                         " s; widen the workspace or lower the speed limits");
+  }
+  plan->name = "plan";
+  plan->controls = std::move(d.u);
+  plan->segment_starts_s = {0.0};
+  plan_internal::AppendStopAndRest(&plan->controls, d.t_s, o.duration_s, o, &d.now);
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, plan);
   if (o.seed_with_usual) {
     std::vector<Motion> compared;
-    KeepTheBetter(sys, params, prior_cov, ws, o, plan, usual != nullptr ? usual : &compared);
+    std::vector<Motion>& motions = usual != nullptr ? *usual : compared;
+    motions = UsualMotions(sys, params, prior_cov, ws, o);
+    plan_internal::SeedWithUsual(sys, params, prior_cov, ws, o, grid, motions, plan);
+    KeepTheBetter(o, prior_sigma, motions, plan);
   }
   return Status{};
 }

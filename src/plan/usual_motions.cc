@@ -6,11 +6,14 @@
 #include <cstdio>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "kincal/plan/planner.h"
 #include "kincal/sim/thesis.h"
+#include "plan/family_search.h"
 #include "plan/shaping.h"
 
 namespace kincal {
@@ -188,20 +191,32 @@ double TimeToTarget(const SigmaCurve& c, const Eigen::VectorXd& targets, const P
   return c.t_s.back() * worst;
 }
 
-// How each family is tried: sizes as fractions of the workspace's size (a square's side,
-// a circle's radius), speeds as fractions of the fastest the size allows within the
-// limits (all of them: the plan may use all of them too).
-constexpr std::array<double, 5> kSquareSides = {0.2, 0.3, 0.4, 0.5, 0.6};
-constexpr std::array<double, 6> kRadii = {0.08, 0.12, 0.16, 0.2, 0.25, 0.3};
-constexpr std::array<double, 4> kSpeeds = {0.4, 0.6, 0.8, 1.0};
+// How each family is tried (BestOfFamily): sizes from the robot's own scale (the smallest
+// square it can drive at speed, the loop it drives a third as fast as it drives straight)
+// to the workspace's (a square's side up to 0.6 of its size, a loop's radius up to 0.3).
+constexpr int kSquareSides = 5;
+constexpr int kRadii = 13;
+constexpr double kLargestSide = 0.6, kLargestRadius = 0.3;  // of the workspace's size
 
 struct Family {
   const System& sys;
   const Eigen::VectorXd& p;
   const PlanOptions& o;
   double size, min_radius, spin;
-  double drive_s;  // driving time: the duration less a stop from the limits
+  double drive_s;     // driving time: the duration less a stop from the limits
+  double smallest_r;  // the smallest loop tried: at least the tightest turn
 };
+
+// The radius of the turn the robot drives a third as fast as it drives straight (at the
+// limits), or its tightest turn when that is wider.
+double SmallestLoop(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                    double min_radius) {
+  const double straight = CruiseSpeed(sys, p, o, 0.0, 1.0);
+  const double r = LargestFitting(0.0, 1e3, 50, [&](double x) {
+    return CruiseSpeed(sys, p, o, 1e3 - x, 1.0) >= straight / 3.0;
+  });
+  return std::max(min_radius, 1e3 - r);
+}
 
 std::string Described(const std::string& family, const std::string& size, double v) {
   char text[96];
@@ -215,81 +230,41 @@ std::string Metres(const char* what, double x) {
   return text;
 }
 
-std::vector<Motion> Squares(const Family& f) {
-  std::vector<Motion> out;
-  const double r = std::max(f.min_radius, 0.1 * f.size);  // a steered robot's corners
+// A square of a side at a fraction of the fastest speed (corners: turns in place, or of a
+// steered robot's tightest radius).
+plan_internal::FamilySizes SquareSides(const Family& f, double* corner_radius) {
+  *corner_radius = std::max(f.min_radius, 0.1 * f.size);
+  const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : *corner_radius, 1.0);
+  // The smallest side: ramping up to full speed and down again (and two corners).
+  const double smallest =
+      std::max(fastest * RampTime(f.sys, f.p, f.o, fastest, 0.0), 2.0 * f.smallest_r);
+  return {smallest, kLargestSide * f.size, kSquareSides};
+}
+
+plan_internal::FamilyMember Squares(const Family& f) {
+  double r = 0.0;
+  SquareSides(f, &r);
   const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : r, 1.0);
-  for (double side : kSquareSides) {
-    for (double k : kSpeeds) {
-      const double v = k * fastest;
-      if (!(v > 0.0)) continue;  // the limits allow no motion of this kind
-      out.push_back(FromPieces(f.sys, f.p, f.o,
-                               Described("square", Metres("side", side * f.size), v),
-                               Square(f.sys, f.p, f.o, side * f.size, v, k * f.spin, r)));
-    }
-  }
-  return out;
+  return [&f, r, fastest](double side, double k) -> std::optional<Motion> {
+    const double v = k * fastest;
+    if (!(v > 0.0)) return std::nullopt;  // the limits allow no motion of this kind
+    return FromPieces(f.sys, f.p, f.o, Described("square", Metres("side", side), v),
+                      Square(f.sys, f.p, f.o, side, v, k * f.spin, r));
+  };
 }
 
-// Circles of each radius (at least the tightest turn), turning each way in turn: one lap
-// each way a figure-eight, as many laps as fill half the driving time a circle each way.
-std::vector<Motion> Loops(const Family& f, const std::string& name, bool figure_eight) {
-  std::vector<Motion> out;
-  double last_r = -1.0;
-  for (double q : kRadii) {
-    const double r = std::max(f.min_radius, q * f.size);
-    if (r == last_r) continue;  // several sizes below the tightest turn
-    last_r = r;
-    const double fastest = CruiseSpeed(f.sys, f.p, f.o, r, 1.0);
-    for (double k : kSpeeds) {
-      const double v = k * fastest;
-      const double loop = 2.0 * std::numbers::pi * r / v;
-      // Not a full turn each way in the time (or no motion of this kind at all).
-      if (!(v > 0.0) || 2.0 * loop > f.drive_s) continue;
-      const int laps = figure_eight ? 1 : std::max(1, static_cast<int>(0.5 * f.drive_s / loop));
-      out.push_back(FromPieces(f.sys, f.p, f.o, Described(name, Metres("radius", r), v),
-                               {{v, v / r, laps * loop}, {v, -v / r, laps * loop}}));
-    }
-  }
-  return out;
-}
-
-std::vector<Motion> Circles(const Family& f) { return Loops(f, "circle each way", false); }
-std::vector<Motion> FigureEights(const Family& f) { return Loops(f, "figure-eight", true); }
-
-// Every candidate evaluated. The best (MotionRank) that keeps every robot within the prior
-// inside; and before it, when better, the best at the design point (which then leaves for
-// some robot within the prior: every_robot_stays_in false). When none stays in even at
-// the design point, the best of all.
-std::vector<Motion> BestOf(std::vector<Motion> candidates, const System& sys,
-                           const Eigen::VectorXd& params, const Eigen::MatrixXd& prior_cov,
-                           const Workspace& ws, const PlanOptions& o) {
-  if (candidates.empty()) return {};
-  const Eigen::VectorXd prior_sigma = prior_cov.diagonal().cwiseSqrt();
-  std::vector<std::pair<double, size_t>> order;  // (rank, index), those that stay in first
-  for (size_t k = 0; k < candidates.size(); ++k) {
-    Motion& m = candidates[k];
-    EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &m);
-    const double penalty = m.stays_in ? 0.0 : std::numeric_limits<double>::max();
-    order.emplace_back(std::max(MotionRank(m, o, prior_sigma), penalty), k);
-  }
-  std::stable_sort(order.begin(), order.end());
-  std::vector<Motion> out;
-  for (const auto& [rank, k] : order) {
-    Motion& m = candidates[k];
-    if (!m.stays_in) break;
-    if (EveryRobotStaysIn(sys, params, prior_cov, ws, o, m.controls)) {
-      out.push_back(std::move(m));
-      break;
-    }
-    m.every_robot_stays_in = false;
-    if (out.empty()) out.push_back(m);
-  }
-  if (out.empty()) {
-    out.push_back(std::move(candidates[order.front().second]));
-    out.back().every_robot_stays_in = false;
-  }
-  return out;
+// Circles of a radius (at least the tightest turn), turning each way in turn: one lap each
+// way a figure-eight, as many laps as fill half the driving time a circle each way.
+plan_internal::FamilyMember Loops(const Family& f, const char* name, bool figure_eight) {
+  return [&f, name, figure_eight](double r, double k) -> std::optional<Motion> {
+    const double v = k * CruiseSpeed(f.sys, f.p, f.o, r, 1.0);
+    const double loop = 2.0 * std::numbers::pi * r / v;
+    // Not a full turn each way in the time (or no motion of this kind at all).
+    if (!(v > 0.0) || r < f.min_radius || 2.0 * loop > f.drive_s) return std::nullopt;
+    const int laps = figure_eight ? 1 : std::max(1, static_cast<int>(0.5 * f.drive_s / loop));
+    return FromPieces(f.sys, f.p, f.o, Described(name, Metres("radius", r), v),
+                      {{v, v / r, laps * loop}, {v, -v / r, laps * loop}});
+  };
 }
 
 }  // namespace
@@ -316,12 +291,18 @@ std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& param
                  ws.Size(),
                  min_radius,
                  SpinRate(sys, params, o, 1.0),
-                 o.duration_s - plan_internal::LongestStopSeconds(o, sys.num_controls())};
+                 o.duration_s - plan_internal::LongestStopSeconds(o, sys.num_controls()),
+                 SmallestLoop(sys, params, o, min_radius)};
   std::vector<Motion> out;
-  // Each family at every size and speed of its grid (drawn from the start at the
-  // workspace's centre, heading +x), the best that stays in kept.
-  for (auto candidates : {Squares(f), Circles(f), FigureEights(f)}) {
-    for (Motion& m : BestOf(std::move(candidates), sys, params, prior_cov, ws, o)) {
+  // Each family searched (drawn from the start at the workspace's centre, heading +x).
+  double corner = 0.0;
+  const plan_internal::FamilySizes loops{f.smallest_r, kLargestRadius * f.size, kRadii};
+  const std::array<std::pair<plan_internal::FamilyMember, plan_internal::FamilySizes>, 3> families =
+      {{{Squares(f), SquareSides(f, &corner)},
+        {Loops(f, "circle each way", false), loops},
+        {Loops(f, "figure-eight", true), loops}}};
+  for (const auto& [member, sizes] : families) {
+    for (Motion& m : plan_internal::BestOfFamily(member, sizes, sys, params, prior_cov, ws, o)) {
       out.push_back(std::move(m));
     }
   }

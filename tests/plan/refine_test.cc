@@ -3,20 +3,13 @@
 
 #include <gtest/gtest.h>
 
+#include "plan/plan_cases.h"
+
 namespace kincal::plan_internal {
 namespace {
 
-struct RefineCase {
-  System sys = MakeSystem("unicycle", {"actuator_lag"}).value();
-  Eigen::VectorXd p = (Eigen::VectorXd(3) << 1.0, 1.0, 0.15).finished();
-  Eigen::MatrixXd prior = Eigen::Vector3d(0.01, 0.01, 0.01).asDiagonal();
-  PlanOptions o;
-  RefineCase() {
-    o.duration_s = 10.0;
-    o.max_abs = {0.5, 2.0};
-    o.max_accel = {1.0, 4.0};
-    o.targets = (Eigen::VectorXd(3) << 1e-3, 1e-3, 3e-3).finished();
-  }
+struct RefineCase : plan_testing::UnicycleWithALag {
+  RefineCase() : UnicycleWithALag(10.0) {}
 };
 
 double TimeOf(const RefineCase& c, const Workspace& ws, const ControlSignal& u) {
@@ -50,8 +43,9 @@ TEST(Refine, SegmentsAreSlewedToAndTheMotionEndsAtRest) {
   }
 }
 
-// Refining never makes the plan slower, keeps every robot within the prior inside, and
-// here finds a faster one; without targets it does nothing.
+// Refining never makes the plan slower, keeps every robot within the prior inside (the
+// segments it returns, cut to those its last pass checked, and a stop), and here finds a
+// faster one; without targets it does nothing.
 TEST(Refine, NeverSlowerAlwaysInside) {
   RefineCase c;
   const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
@@ -74,6 +68,32 @@ TEST(Refine, NeverSlowerAlwaysInside) {
   std::vector<Values> same = segments;
   EXPECT_EQ(RefineSegments(c.sys, c.p, c.prior, *ws, none, grid, 3, &same), 0);
   EXPECT_EQ(same, segments);
+}
+
+// The soonest of the greedy designs under each criterion, each refined: no later than any
+// of them, and every robot within the prior inside along it and a stop after it.
+TEST(Refine, DesignSoonestIsNoLaterThanAnyCriterionsDesign) {
+  RefineCase c;
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  const std::vector<Values> grid = CandidateControls(c.sys, c.p, c.o);
+  const Eigen::VectorXd prior_sigma = c.prior.diagonal().cwiseSqrt();
+  double each = 1e9;
+  for (DesignCriterion k : {DesignCriterion::kTargets, DesignCriterion::kD, DesignCriterion::kA}) {
+    PlanOptions o = c.o;
+    o.criterion = k;
+    Design d = DesignAtStart(c.sys, c.p, c.prior, *ws, o);
+    ASSERT_TRUE(DesignSegments(c.sys, *ws, o, grid, prior_sigma, 19, true, &d));
+    each = std::min(each, TimeOf(c, *ws, ControlsOfSegments(d.chosen, c.o, 2)));
+  }
+  Design d = DesignAtStart(c.sys, c.p, c.prior, *ws, c.o);
+  ASSERT_TRUE(DesignSegments(c.sys, *ws, c.o, grid, prior_sigma, 19, true, &d));
+  DesignSoonest(c.sys, c.p, c.prior, *ws, c.o, grid, &d);
+  const ControlSignal u = ControlsOfSegments(d.chosen, c.o, 2);
+  const double soonest = TimeOf(c, *ws, u);
+  std::cout << "soonest " << soonest << " s, the best criterion's greedy " << each << " s\n";
+  EXPECT_LE(soonest, each);
+  EXPECT_NEAR(d.t_s, static_cast<double>(d.chosen.size()) * c.o.segment_s, 1e-9);
+  EXPECT_TRUE(EveryRobotStaysIn(c.sys, c.p, c.prior, *ws, c.o, u));
 }
 
 }  // namespace

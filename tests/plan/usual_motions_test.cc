@@ -3,6 +3,7 @@
 // the thesis's runs are 99 segments.
 #include <gtest/gtest.h>
 
+#include <iostream>
 #include <numbers>
 
 #include "kincal/angles.h"
@@ -70,6 +71,38 @@ TEST(UsualMotions, AreWhatTheirNamesSay) {
   const double turn = 0.95 * 2.0 * std::numbers::pi;
   EXPECT_GT(most, turn);
   EXPECT_GT(fall, turn);
+}
+
+// A family's sizes start at the robot's own scale, not at a fraction of the workspace: on a
+// floor of 100 x 100 m the best figure-eight is as small and nearly as fast as on 3 x 2 m
+// (it was a fraction of the floor's size, and needed 32 s where 6.75 s will do).
+TEST(UsualMotions, SizesStartAtTheRobotsScaleOnALargeFloor) {
+  const System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value();
+  const Eigen::VectorXd p =
+      (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
+  const Eigen::MatrixXd prior =
+      (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05)
+          .finished()
+          .cwiseAbs2()
+          .asDiagonal();
+  PlanOptions o;
+  o.duration_s = 20.0;
+  o.max_abs = {20.0, 20.0};
+  o.max_accel = {40.0, 40.0};
+  o.targets = (Eigen::VectorXd(8) << 3e-5, 3e-5, 3e-4, 3e-3, 3e-3, 2e-3, 2e-3, 0.0).finished();
+  o.care = {0, 1, 2, 3, 4, 5, 6};
+  auto eight = [&](const Workspace& ws) {
+    for (const Motion& m : UsualMotions(sys, p, prior, ws, o)) {
+      if (m.name.rfind("figure-eight (", 0) == 0) return m.curve.time_to_target_s;
+    }
+    return 1e9;
+  };
+  const double small = eight(*MakeArena(-1.5, -1.0, 1.5, 1.0));
+  const double large = eight(*MakeArena(-50.0, -50.0, 50.0, 50.0));
+  std::cout << "best figure-eight: " << small << " s on 3 x 2 m, " << large
+            << " s on 100 x 100 m\n";
+  EXPECT_LE(small, 7.0);
+  EXPECT_LE(large, 1.2 * small);
 }
 
 }  // namespace

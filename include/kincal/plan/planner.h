@@ -8,7 +8,10 @@
 // allowed only if the target stays in the workspace along it and along a stop after it,
 // for every robot within the k-sigma ellipsoid of the prior: the robots at +-k sigma
 // along each principal axis are driven as they are, and the ellipsoid between them is
-// checked through the spread of poses they imply (to first order).
+// checked through the spread of poses they imply (to first order). With targets, the
+// design is first made up to them under each criterion and looked ahead on (the soonest
+// kept, src/plan/refine.h), and seeded with the usual motions (src/plan/seeding.h); the
+// rest of the duration is then designed on greedily.
 //
 // Score (the parameters `care`, each scaled by its target sigma, or its prior sigma when
 // it has none): A-optimal, the sum of the scaled variances; D-optimal, the log
@@ -50,13 +53,15 @@ struct PlanOptions {
   // Robot pose (x, y, theta) where the motion starts, at rest; unset: the workspace's
   // centre, heading along +x.
   std::optional<Eigen::Vector3d> start;
-  // Never worse than the usual motions: the best of them (UsualMotions) that keeps every
-  // robot within the prior inside replaces the greedy plan when it is better (MotionRank).
-  // It costs the usual motions' evaluation (about a second for 60 s); kincald's guidance,
-  // which plans short legs again and again, does without.
+  // Never worse than the usual motions: designs seeded with each of them
+  // (src/plan/seeding.h), and the best of them (UsualMotions) that keeps every robot within
+  // the prior inside, replace the plan when better (MotionRank). It costs the usual
+  // motions' search (some 3 s for 60 s); kincald's guidance, which plans short legs again
+  // and again, does without.
   bool seed_with_usual = true;
-  // Looking ahead: with targets, the greedy plan's segments before the targets are reached
-  // are revisited this many times (src/plan/refine.h); 0: the greedy plan as it is.
+  // Looking ahead: with targets, the greedy designs up to them under each criterion are
+  // revisited this many times and the soonest kept (src/plan/refine.h); 0: the greedy
+  // plan under `criterion` as it is.
   int refine_passes = 3;
   bool IsValid(const System& sys, std::string* error) const;
 };
@@ -101,6 +106,10 @@ struct Motion {
   // plan's own guarantee, and what a usual motion is kept for).
   bool every_robot_stays_in = true;
   double left_at_s = -1.0;  // first time it left the workspace (nominal), or -1
+  // A usual motion stopped once it reaches the targets at the design point (what
+  // every_robot_stays_in was judged on): the whole motion, which a robot that needs longer
+  // drives on. Empty for the others.
+  ControlSignal unstopped;
 };
 
 // The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
@@ -126,9 +135,11 @@ bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
                        const ControlSignal& u);
 
 // The usual calibration motions on the same time budget, speeds and workspace, each the
-// best of its family: a square, a circle each way and a figure-eight, each tried at five
-// or six sizes and four speeds up to the limits: the best (MotionRank) that keeps every
-// robot within the prior inside, as the plan does, and before it, when better, the best
+// best of its family (src/plan/family_search.h): a square, a circle each way and a
+// figure-eight, each tried at sizes from the robot's scale to the workspace's and four
+// speeds up to the limits, then finer about the best: the best (MotionRank) that keeps
+// every robot within the prior inside, as the plan does, whole or stopped once it reaches
+// the targets (`unstopped` then keeps the whole), and before it, when better, the best
 // that stays in at the design point only (every_robot_stays_in false); and the thesis's 99
 // constant-control runs (each a separate segment, the robot carried back between them). Each is
 // evaluated like the plan.

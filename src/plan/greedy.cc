@@ -1,0 +1,117 @@
+#include "plan/greedy.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <optional>
+#include <span>
+#include <utility>
+
+namespace kincal::plan_internal {
+namespace {
+
+constexpr double kAnticipateS = 1.0;  // the most negative delay driven exactly (s)
+
+// One candidate driven for a segment: its controls, where they end, what is then known.
+struct Trial {
+  double score;
+  ControlSignal u;
+  Values end;
+  DesignInformation info;
+  Values value;  // the segment's control
+};
+
+// Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
+// within the prior would leave the workspace.
+std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
+                                  const Eigen::VectorXd& prior_sigma, const Values& cand,
+                                  const Design& d) {
+  ControlSignal u = d.u;
+  Values at = d.now;
+  const double t1 = d.t_s + o.segment_s;
+  AppendSlewed(&u, d.t_s, t1, cand, o, &at);
+  // The stop after it: until every robot within the prior has come to rest (a lag or a
+  // delay at the prior's 3 sigma keeps one moving for a while).
+  ControlSignal braked = u;
+  Values b = at;
+  const double settle = t1 + o.segment_s + kSettleS;
+  AppendSlewed(&braked, t1, settle, Values{}, o, &b);
+  Fleet fleet = d.fleet;
+  if (!DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet)) return std::nullopt;
+  DesignInformation info = d.info;
+  info.Advance(t1, u);
+  const double score = DesignScore(info.Covariance(), prior_sigma, o);
+  return Trial{score, std::move(u), at, std::move(info), cand};
+}
+
+}  // namespace
+
+Design DesignAtStart(const System& sys, const Eigen::VectorXd& params,
+                     const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o) {
+  const Eigen::Vector3d start = StartPose(ws, o);
+  Design d{ControlSignal(sys.num_controls(), 0),
+           Values{},
+           DesignInformation(sys, params, prior_cov, o.info),
+           Fleet{},
+           0.0,
+           {}};
+  d.info.StartSegment(start, 0.0, d.u);
+  d.fleet = FleetAtStart(sys, params, prior_cov, start, o, d.u);
+  return d;
+}
+
+bool DesignFromSeed(const System& sys, const Workspace& ws, const PlanOptions& o,
+                    const ControlSignal& seed, double seed_s, Design* d) {
+  const int nc = sys.num_controls();
+  for (int i = 0; i < static_cast<int>(seed.size()) && seed.TimeAt(i) < seed_s - 1e-9; ++i) {
+    d->u.Append(d->u.ToNs(seed.TimeAt(i)), std::span<const double>(seed.ValuesAt(i).data(), nc));
+  }
+  d->now = seed.At(seed_s);
+  d->t_s = seed_s;
+  d->info.Advance(seed_s, d->u);
+  // A stop from the seed's end must keep every robot inside too (as each segment's does).
+  ControlSignal braked = d->u;
+  Values b = d->now;
+  AppendSlewed(&braked, seed_s, seed_s + o.segment_s + kSettleS, Values{}, o, &b);
+  Fleet stopped = d->fleet;
+  if (!DriveFleet(sys, braked, ws, seed_s + o.segment_s + kSettleS, kFleetCheckS, true, &stopped)) {
+    return false;
+  }
+  return DriveFleet(sys, d->u, ws, std::max(0.0, seed_s - kAnticipateS), kFleetCheckS, true,
+                    &d->fleet);
+}
+
+bool DesignSegments(const System& sys, const Workspace& ws, const PlanOptions& o,
+                    const std::vector<Values>& grid, const Eigen::VectorXd& prior_sigma, int count,
+                    bool until_targets, Design* d) {
+  for (int s = 0; s < count; ++s) {
+    if (until_targets && WorstTargetRatio(d->info.Covariance(), o) <= 1.0) return true;
+    std::optional<Trial> best;
+    for (const Values& cand : grid) {
+      std::optional<Trial> t = TryCandidate(sys, ws, o, prior_sigma, cand, *d);
+      if (t && (!best || t->score < best->score)) best = std::move(t);
+    }
+    if (!best) return false;
+    d->u = std::move(best->u);
+    d->chosen.push_back(best->value);
+    d->now = best->end;
+    d->info = std::move(best->info);
+    d->t_s += o.segment_s;
+    // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
+    // camera clock behind the robot's) moves by commands not yet chosen, and is driven
+    // through them only when they are.
+    DriveFleet(sys, d->u, ws, std::max(0.0, d->t_s - kAnticipateS), kFleetCheckS, false, &d->fleet);
+  }
+  return true;
+}
+
+double WorstTargetRatio(const Eigen::MatrixXd& cov, const PlanOptions& o) {
+  if (o.targets.size() == 0) return std::numeric_limits<double>::infinity();
+  double worst = 0.0;
+  for (int i : ScoredParams(o, static_cast<int>(cov.rows()))) {
+    if (o.targets[i] > 0.0) worst = std::max(worst, std::sqrt(cov(i, i)) / o.targets[i]);
+  }
+  return worst;
+}
+
+}  // namespace kincal::plan_internal
