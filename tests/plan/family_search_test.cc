@@ -76,7 +76,7 @@ TEST(FamilySearch, AMotionStoppedAtTheTargetsIsTheSameUntilThen) {
 }
 
 // The search finds the family's best: no figure-eight of a dense grid of radii and speeds
-// reaches the targets sooner (a coarse grid alone misses it by a second: measured).
+// reaches the targets sooner (7 radii without the finer search miss it by 0.75 s: measured).
 TEST(FamilySearch, FindsTheBestOfADenseGrid) {
   const LoopCase c;
   const FamilyMember member = c.FigureEight();
