@@ -21,16 +21,23 @@ import sys
 
 import lcm
 
+TYPES = {}  # {LCM fingerprint: class}, filled in main()
 OUTPUTS = ["KINCAL_POSE", "KINCAL_MARKERS", "KINCAL_PARAMS", "KINCAL_MODEL_CHECK",
            "KINCAL_CALIBRATION"]
 
 
-def normalised(channel, data):
+def decoded(data):
+    """The message in `data`, its type known by its LCM fingerprint (as the page, the MCAP
+    export and the SIGKILL check read logs), or None when no kincal type has it."""
+    cls = TYPES.get(data[:8])
+    return cls.decode(data) if cls is not None else None
+
+
+def normalised(data):
     """The bytes that must replay identically: a batch calibration less its wall time."""
-    if channel != "KINCAL_CALIBRATION":
+    m = decoded(data)
+    if m is None or type(m).__name__ != "calibration_t":
         return data
-    from kincal import calibration_t
-    m = calibration_t.decode(data)
     m.compute_s = 0.0
     return m.encode()
 
@@ -38,25 +45,28 @@ def normalised(channel, data):
 def load(path):
     events = collections.defaultdict(list)
     for e in lcm.EventLog(path, "r"):
-        events[e.channel].append((e.timestamp, normalised(e.channel, e.data)))
+        events[e.channel].append((e.timestamp, normalised(e.data)))
     return events
 
 
-def describe(channel, data):
+def describe(data):
     """The decoded message, for a readable failure."""
     try:
-        from kincal import calibration_t, markers_t, model_check_t, params_t, pose_t
-        cls = {"KINCAL_POSE": pose_t, "KINCAL_MARKERS": markers_t, "KINCAL_PARAMS": params_t,
-               "KINCAL_MODEL_CHECK": model_check_t, "KINCAL_CALIBRATION": calibration_t}[channel]
-        m = cls.decode(data)
+        m = decoded(data)
+        if m is None:
+            return f"<{len(data)} bytes of no kincal type>"
         return {k: getattr(m, k) for k in m.__slots__ if k not in ("covariance",)}
     except Exception as e:  # the bytes differ so much that they do not decode
         return f"<{len(data)} bytes, undecodable: {e}>"
 
 
 def main():
+    global TYPES
     kincald, config, golden, lcmgen_python, scratch = sys.argv[1:6]
     sys.path.insert(0, lcmgen_python)
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts"))
+    from kincal_lcm_types import message_types
+    TYPES = message_types()
     os.makedirs(scratch, exist_ok=True)
     out = os.path.join(scratch, "replayed.lcm")
     if os.path.exists(out):
@@ -76,8 +86,8 @@ def main():
             failures += 1
         for k, (ea, eb) in enumerate(zip(a, b)):
             if ea != eb:
-                print(f"golden_replay: {ch} event {k} differs:\n  golden   {ea[0]} {describe(ch, ea[1])}\n"
-                      f"  replayed {eb[0]} {describe(ch, eb[1])}")
+                print(f"golden_replay: {ch} event {k} differs:\n  golden   {ea[0]} {describe(ea[1])}\n"
+                      f"  replayed {eb[0]} {describe(eb[1])}")
                 failures += 1
                 break
         if len(a) == len(b) and a == b:
