@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <future>
 #include <numeric>
 #include <optional>
 
@@ -271,6 +272,13 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                          " s before the stop (" + std::to_string(stop_s) +
                          " s from the speed limits at the acceleration limits)");
   }
+  // The usual motions are searched on a second core while the plan is designed (they are
+  // independent until the seeds; the inputs are only read).
+  std::future<std::vector<Motion>> searched;
+  if (o.seed_with_usual) {
+    searched =
+        std::async(std::launch::async, [&] { return UsualMotions(sys, params, prior_cov, ws, o); });
+  }
   // With targets, designed up to them first (and sooner, DesignSoonest), then on.
   const bool targets = o.targets.size() > 0;
   bool ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma, segments, targets, &d);
@@ -295,7 +303,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   if (o.seed_with_usual) {
     std::vector<Motion> compared;
     std::vector<Motion>& motions = usual != nullptr ? *usual : compared;
-    motions = UsualMotions(sys, params, prior_cov, ws, o);
+    motions = searched.get();
     plan_internal::SeedWithUsual(sys, params, prior_cov, ws, o, grid, motions, plan);
     KeepTheBetter(o, prior_sigma, motions, plan);
   }

@@ -56,8 +56,8 @@ struct PlanOptions {
   // Never worse than the usual motions: designs seeded with each of them
   // (src/plan/seeding.h), and the best of them (UsualMotions) that keeps every robot within
   // the prior inside, replace the plan when better (MotionRank). It costs the usual
-  // motions' search (some 3 s for 60 s); kincald's guidance, which plans short legs again
-  // and again, does without.
+  // motions' search (some 3 s of a second core for 60 s, run while the plan is designed);
+  // kincald's guidance, which plans short legs again and again, does without.
   bool seed_with_usual = true;
   // Looking ahead: with targets, the greedy designs up to them under each criterion are
   // revisited this many times and the soonest kept (src/plan/refine.h); 0: the greedy
