@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <span>
 #include <string>
 #include <utility>
 
@@ -137,10 +136,7 @@ std::optional<Motion> StoppedAtTargets(const System& sys, const Eigen::VectorXd&
   out.segment_starts_s = m.segment_starts_s;
   out.unstopped = m.controls;
   out.controls = ControlSignal(nc, 0);
-  for (int i = 0; i < static_cast<int>(m.controls.size()) && m.controls.TimeAt(i) < t - 1e-9; ++i) {
-    out.controls.Append(out.controls.ToNs(m.controls.TimeAt(i)),
-                        std::span<const double>(m.controls.ValuesAt(i).data(), nc));
-  }
+  AppendSamplesBefore(&out.controls, m.controls, t);
   Values now = m.controls.At(t);
   AppendStopAndRest(&out.controls, t, o.duration_s, o, &now);
   EvaluateMotion(sys, params, prior_cov, ws, o, kCurveStepS, &out);

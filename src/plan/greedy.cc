@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <span>
 #include <utility>
 
 namespace kincal::plan_internal {
@@ -21,6 +20,18 @@ struct Trial {
   Values value;  // the segment's control
 };
 
+// Whether `fleet` (driven along u so far) keeps inside along u to t_s, where u is at
+// `at`, and a stop from there: until every robot within the prior has come to rest (a lag
+// or a delay at the prior's 3 sigma keeps one moving for a while).
+bool StopsInside(const System& sys, const Workspace& ws, const PlanOptions& o,
+                 const ControlSignal& u, const Values& at, double t_s, Fleet fleet) {
+  ControlSignal braked = u;
+  Values b = at;
+  const double settle = t_s + o.segment_s + kSettleS;
+  AppendSlewed(&braked, t_s, settle, Values{}, o, &b);
+  return DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet);
+}
+
 // Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
 // within the prior would leave the workspace.
 std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
@@ -30,14 +41,7 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
   Values at = d.now;
   const double t1 = d.t_s + o.segment_s;
   AppendSlewed(&u, d.t_s, t1, cand, o, &at);
-  // The stop after it: until every robot within the prior has come to rest (a lag or a
-  // delay at the prior's 3 sigma keeps one moving for a while).
-  ControlSignal braked = u;
-  Values b = at;
-  const double settle = t1 + o.segment_s + kSettleS;
-  AppendSlewed(&braked, t1, settle, Values{}, o, &b);
-  Fleet fleet = d.fleet;
-  if (!DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet)) return std::nullopt;
+  if (!StopsInside(sys, ws, o, u, at, t1, d.fleet)) return std::nullopt;
   DesignInformation info = d.info;
   info.Advance(t1, u);
   const double score = DesignScore(info.Covariance(), prior_sigma, o);
@@ -62,21 +66,12 @@ Design DesignAtStart(const System& sys, const Eigen::VectorXd& params,
 
 bool DesignFromSeed(const System& sys, const Workspace& ws, const PlanOptions& o,
                     const ControlSignal& seed, double seed_s, Design* d) {
-  const int nc = sys.num_controls();
-  for (int i = 0; i < static_cast<int>(seed.size()) && seed.TimeAt(i) < seed_s - 1e-9; ++i) {
-    d->u.Append(d->u.ToNs(seed.TimeAt(i)), std::span<const double>(seed.ValuesAt(i).data(), nc));
-  }
+  AppendSamplesBefore(&d->u, seed, seed_s);
   d->now = seed.At(seed_s);
   d->t_s = seed_s;
   d->info.Advance(seed_s, d->u);
   // A stop from the seed's end must keep every robot inside too (as each segment's does).
-  ControlSignal braked = d->u;
-  Values b = d->now;
-  AppendSlewed(&braked, seed_s, seed_s + o.segment_s + kSettleS, Values{}, o, &b);
-  Fleet stopped = d->fleet;
-  if (!DriveFleet(sys, braked, ws, seed_s + o.segment_s + kSettleS, kFleetCheckS, true, &stopped)) {
-    return false;
-  }
+  if (!StopsInside(sys, ws, o, d->u, d->now, seed_s, d->fleet)) return false;
   return DriveFleet(sys, d->u, ws, std::max(0.0, seed_s - kAnticipateS), kFleetCheckS, true,
                     &d->fleet);
 }

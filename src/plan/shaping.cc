@@ -49,6 +49,14 @@ void AppendRest(ControlSignal* signal, double t_s) {
                  std::span<const double>(zero.data(), static_cast<size_t>(signal->num_channels())));
 }
 
+void AppendSamplesBefore(ControlSignal* signal, const ControlSignal& from, double t_s) {
+  const size_t nc = static_cast<size_t>(from.num_channels());
+  for (int i = 0; i < static_cast<int>(from.size()) && from.TimeAt(i) < t_s - 1e-9; ++i) {
+    signal->Append(signal->ToNs(from.TimeAt(i)),
+                   std::span<const double>(from.ValuesAt(i).data(), nc));
+  }
+}
+
 double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u) {
   const double ramp_s = RampSeconds(*u, Values{}, signal->num_channels(), o);
   const double dt = 1.0 / o.control_rate_hz;

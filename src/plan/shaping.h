@@ -22,6 +22,10 @@ void AppendSlewed(ControlSignal* signal, double t0_s, double t1_s, const Values&
 // A sample of zeros at t_s: the robot stopped.
 void AppendRest(ControlSignal* signal, double t_s);
 
+// Appends every sample of `from` before t_s (at its time; the two signals share an origin):
+// a motion's start, to be driven on from its values at t_s.
+void AppendSamplesBefore(ControlSignal* signal, const ControlSignal& from, double t_s);
+
 // From t0_s, every channel from *u to zero at its acceleration limit (AppendSlewed), then a
 // sample at rest; *u ends at zero. Returns the time of the rest sample.
 double AppendStop(ControlSignal* signal, double t0_s, const PlanOptions& o, Values* u);

@@ -230,27 +230,21 @@ std::string Metres(const char* what, double x) {
   return text;
 }
 
-// A square of a side at a fraction of the fastest speed (corners: turns in place, or of a
-// steered robot's tightest radius).
-plan_internal::FamilySizes SquareSides(const Family& f, double* corner_radius) {
-  *corner_radius = std::max(f.min_radius, 0.1 * f.size);
-  const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : *corner_radius, 1.0);
-  // The smallest side: ramping up to full speed and down again (and two corners).
+// Squares of a side at a fraction of the fastest speed (corners: turns in place, or of a
+// steered robot's tightest radius), and the sides tried: from ramping up to full speed and
+// down again (and two corners) to the workspace's.
+std::pair<plan_internal::FamilyMember, plan_internal::FamilySizes> Squares(const Family& f) {
+  const double r = std::max(f.min_radius, 0.1 * f.size);
+  const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : r, 1.0);
   const double smallest =
       std::max(fastest * RampTime(f.sys, f.p, f.o, fastest, 0.0), 2.0 * f.smallest_r);
-  return {smallest, kLargestSide * f.size, kSquareSides};
-}
-
-plan_internal::FamilyMember Squares(const Family& f) {
-  double r = 0.0;
-  SquareSides(f, &r);
-  const double fastest = CruiseSpeed(f.sys, f.p, f.o, f.spin > 0.0 ? 0.0 : r, 1.0);
-  return [&f, r, fastest](double side, double k) -> std::optional<Motion> {
-    const double v = k * fastest;
-    if (!(v > 0.0)) return std::nullopt;  // the limits allow no motion of this kind
-    return FromPieces(f.sys, f.p, f.o, Described("square", Metres("side", side), v),
-                      Square(f.sys, f.p, f.o, side, v, k * f.spin, r));
-  };
+  return {[&f, r, fastest](double side, double k) -> std::optional<Motion> {
+            const double v = k * fastest;
+            if (!(v > 0.0)) return std::nullopt;  // the limits allow no motion of this kind
+            return FromPieces(f.sys, f.p, f.o, Described("square", Metres("side", side), v),
+                              Square(f.sys, f.p, f.o, side, v, k * f.spin, r));
+          },
+          {smallest, kLargestSide * f.size, kSquareSides}};
 }
 
 // Circles of a radius (at least the tightest turn), turning each way in turn: one lap each
@@ -295,10 +289,9 @@ std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& param
                  SmallestLoop(sys, params, o, min_radius)};
   std::vector<Motion> out;
   // Each family searched (drawn from the start at the workspace's centre, heading +x).
-  double corner = 0.0;
   const plan_internal::FamilySizes loops{f.smallest_r, kLargestRadius * f.size, kRadii};
   const std::array<std::pair<plan_internal::FamilyMember, plan_internal::FamilySizes>, 3> families =
-      {{{Squares(f), SquareSides(f, &corner)},
+      {{Squares(f),
         {Loops(f, "circle each way", false), loops},
         {Loops(f, "figure-eight", true), loops}}};
   for (const auto& [member, sizes] : families) {
