@@ -25,7 +25,9 @@ ControlSignal SegmentsDriven(const std::vector<Values>& segments, const PlanOpti
 // With targets: passes over the segments before the time the targets are reached, each
 // segment tried at every value of `grid`; a change is kept when it lowers the largest
 // sigma-over-target at that time and every robot within the prior still keeps inside
-// along those segments and a stop after them (FleetStaysInside, the planner's rule). Up to
+// along those segments and a stop after them (FleetStaysInside, the planner's rule); then
+// each segment is tried dropped (what follows comes a segment sooner), kept when the
+// targets are then reached a segment sooner and every robot still keeps inside. Up to
 // `passes` passes, fewer when one changes nothing. Returns the changes kept; when there
 // are any, `segments` is cut to those the last pass checked (the segments after them were
 // designed for a path the changes moved: the caller designs them again).
@@ -35,7 +37,8 @@ int RefineSegments(const System& sys, const Eigen::VectorXd& params,
 
 // With targets, `d` a greedy design up to them (DesignSegments with until_targets):
 // greedy designs up to them under the other criteria too (each no more than two segments
-// longer), each refined (RefineSegments, o.refine_passes passes); `d` becomes the one that
+// longer), the soonest refined (RefineSegments, o.refine_passes passes; one designed slower
+// than the soonest so far is not); `d` becomes the one that
 // reaches the targets soonest, at the end of its segments, to be designed on from there.
 // (Which criterion's greedy choices lead soonest to the targets differs from robot to
 // robot: on the reference case D-optimal's, by 15 %.)
