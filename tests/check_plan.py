@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """cli.plan: `kincal plan` on the reference case writes plan.csv (t and the model's
 controls, within the limits), plan.json (every motion's curve) and plan.png, and the plan
-reaches the targets before every usual motion that stays in.
+reaches the targets before every usual motion that stays in; plan.json and the summary
+say how the plan does for the robots within the prior.
 
 Usage: check_plan.py KINCAL OUT_DIR
 """
@@ -40,6 +41,17 @@ def main() -> int:
     # all() over an empty list is True: without a usual motion inside, nothing was compared.
     assert usual, "no usual motion stayed inside the arena: nothing to compare the plan with"
     assert plan is not None and all(plan < u for u in usual), (plan, usual)
+    # The robots within the prior: the design point's time is the plan's own, each
+    # speed-up is the usual motion's time over the plan's, and the summary names the
+    # robot where it is least.
+    within = d["within_prior"]
+    assert within and within[0]["robot"] == "the design point", within[:1]
+    assert within[0]["plan_s"] == plan, (within[0], plan)
+    for w in within:
+        expected = w["usual_s"] / w["plan_s"] if w["plan_s"] else 0.0
+        assert abs(w["speedup"] - expected) < 1e-9, w
+    least = min(within, key=lambda w: w["speedup"])
+    assert f"least at {least['robot']} (" in r.stdout, least
     assert os.path.getsize(os.path.join(out, "plan.png")) > 10000
     print(f"check_plan: plan {plan} s, usual {sorted(usual)}")
     return 0

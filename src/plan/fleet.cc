@@ -11,8 +11,8 @@ namespace {
 
 constexpr double kNonlinearMargin = 1.2;
 
-// The robots that must stay in: the design point and +-k sigma along each principal axis
-// of the prior.
+}  // namespace
+
 std::vector<Eigen::VectorXd> RobotsWithinPrior(const Eigen::VectorXd& params,
                                                const Eigen::MatrixXd& prior_cov, double k) {
   std::vector<Eigen::VectorXd> out = {params};
@@ -25,8 +25,6 @@ std::vector<Eigen::VectorXd> RobotsWithinPrior(const Eigen::VectorXd& params,
   }
   return out;
 }
-
-}  // namespace
 
 // Whether every robot within the k-sigma ellipsoid of the prior keeps its target inside.
 // The axis robots are checked as they are (nonlinear); the ellipsoid between them through

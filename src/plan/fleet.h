@@ -19,6 +19,11 @@ struct Fleet {
   double t_s = 0.0;
 };
 
+// The robots that must stay in: the design point, then +-k sigma along each principal
+// axis of the prior, in pairs (the axis order of Eigen's SelfAdjointEigenSolver).
+std::vector<Eigen::VectorXd> RobotsWithinPrior(const Eigen::VectorXd& params,
+                                               const Eigen::MatrixXd& prior_cov, double k);
+
 // Whether the fleet's targets are inside: FleetInside, the planner's rule (the axis robots
 // and the prior ellipsoid's poses between them, pushed a fifth further out), or
 // CornersInside (the design point and the axis robots only).

@@ -37,6 +37,28 @@ nlohmann::json CurveJson(const Motion& m) {
   return j;
 }
 
+// One line on the plan for the robots within the prior: its least and largest speed-up
+// over the quickest usual motion there, and where it is least.
+void PrintWithinPrior(const Motion& plan, const PlanOptions& o, std::ostream& out) {
+  if (plan.within_prior.empty()) return;
+  const auto [least, at] = LeastSpeedUp(plan);
+  double most = 0.0;
+  const PriorRobotTimes* worst = nullptr;
+  for (const PriorRobotTimes& t : plan.within_prior) {
+    if (std::isfinite(t.plan_s) && t.plan_s > 0.0) most = std::max(most, t.usual_s / t.plan_s);
+    if (t.robot == at) worst = &t;
+  }
+  out << std::setprecision(3) << "for the robots at +-" << o.prior_sigmas
+      << " sigma along the prior's axes (plan.json: within_prior): the plan is " << least << "x to "
+      << most << "x as fast as the quickest usual motion there; least at " << at << " (the plan ";
+  if (std::isfinite(worst->plan_s)) {
+    out << worst->plan_s << " s";
+  } else {
+    out << "not within " << o.duration_s << " s";
+  }
+  out << ", the usual motion " << worst->usual_s << " s)\n";
+}
+
 }  // namespace
 
 std::string ControlsCsv(const System& sys, const ControlSignal& u) {
@@ -79,6 +101,16 @@ Status WritePlanFiles(const std::string& dir, const System& sys, const Eigen::Ve
   j["pose_sigma"] = {o.info.pose_sigma.x(), o.info.pose_sigma.y(), o.info.pose_sigma.z()};
   j["pose_rate_hz"] = o.info.pose_rate_hz;
   j["plan"] = CurveJson(plan);
+  // The plan driven by the robots within the prior, against the quickest usual motion there.
+  j["within_prior"] = nlohmann::json::array();
+  for (const PriorRobotTimes& t : plan.within_prior) {
+    const bool reached = std::isfinite(t.plan_s);
+    j["within_prior"].push_back(
+        {{"robot", t.robot},
+         {"usual_s", t.usual_s},
+         {"plan_s", reached ? nlohmann::json(t.plan_s) : nlohmann::json()},
+         {"speedup", reached && t.plan_s > 0.0 ? t.usual_s / t.plan_s : 0.0}});
+  }
   j["usual"] = nlohmann::json::array();
   for (const auto& m : usual) j["usual"].push_back(CurveJson(m));
   if (Status s = WriteFileAtomically(dir + "/plan.csv", ControlsCsv(sys, plan.controls), "plan");
@@ -120,6 +152,7 @@ void PrintPlanSummary(const System& sys, const PlanOptions& o, const Motion& pla
     }
     out << "\n";
   }
+  PrintWithinPrior(plan, o, out);
 }
 
 Status PublishPlan(const System& sys, const Motion& plan, const std::string& channel) {

@@ -5,6 +5,7 @@
 #include <future>
 #include <numeric>
 #include <optional>
+#include <utility>
 
 #include "kincal/angles.h"
 #include "plan/fleet.h"
@@ -12,6 +13,7 @@
 #include "plan/refine.h"
 #include "plan/seeding.h"
 #include "plan/shaping.h"
+#include "plan/within_prior.h"
 
 namespace kincal {
 namespace {
@@ -274,10 +276,15 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   }
   // The usual motions are searched on a second core while the plan is designed (they are
   // independent until the seeds; the inputs are only read).
-  std::future<std::vector<Motion>> searched;
+  // So are the robots within the prior the plan is judged at, against those motions.
+  std::future<std::pair<std::vector<Motion>, std::vector<plan_internal::Judge>>> searched;
   if (o.seed_with_usual) {
-    searched =
-        std::async(std::launch::async, [&] { return UsualMotions(sys, params, prior_cov, ws, o); });
+    searched = std::async(std::launch::async, [&] {
+      std::vector<Motion> found = UsualMotions(sys, params, prior_cov, ws, o);
+      std::vector<plan_internal::Judge> judges =
+          plan_internal::JudgesWithinPrior(sys, params, prior_cov, ws, o, found);
+      return std::make_pair(std::move(found), std::move(judges));
+    });
   }
   // With targets, designed up to them first (and sooner, DesignSoonest), then on.
   const bool targets = o.targets.size() > 0;
@@ -303,9 +310,11 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   if (o.seed_with_usual) {
     std::vector<Motion> compared;
     std::vector<Motion>& motions = usual != nullptr ? *usual : compared;
-    motions = searched.get();
+    auto [found, judges] = searched.get();
+    motions = std::move(found);
     plan_internal::SeedWithUsual(sys, params, prior_cov, ws, o, grid, motions, plan);
     KeepTheBetter(o, prior_sigma, motions, plan);
+    plan_internal::JudgePlan(sys, prior_cov, ws, o, judges, plan);
   }
   return Status{};
 }

@@ -129,10 +129,10 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
 }
 
 // The plan and the usual motions that keep every robot within the prior inside, driven by
-// a true robot other than the design point: the plan's time to the targets over the best
-// of theirs (their sigma curves evaluated at that robot; the controls are the same).
-double SpeedUpFor(const PlanCase& c, const Workspace& ws, const Motion& plan,
-                  const std::vector<Motion>& usual, const Eigen::VectorXd& truth) {
+// a true robot other than the design point: their times to the targets (their sigma
+// curves evaluated at that robot; the controls are the same).
+PriorRobotTimes TimesFor(const PlanCase& c, const Workspace& ws, const Motion& plan,
+                         const std::vector<Motion>& usual, const Eigen::VectorXd& truth) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
   Motion own = plan;
   EvaluateMotion(c.sys, truth, prior, ws, c.o, kCurveStepS, &own);
@@ -149,7 +149,15 @@ double SpeedUpFor(const PlanCase& c, const Workspace& ws, const Motion& plan,
   EXPECT_GT(best, 0.0);
   std::cout << "  the plan " << own.curve.time_to_target_s << " s, the best usual motion " << best
             << " s\n";
-  return best / own.curve.time_to_target_s;
+  return {"", best, own.curve.time_to_target_s};
+}
+
+// The plan's own account of a robot within the prior (Motion::within_prior), or nothing.
+const PriorRobotTimes* Reported(const Motion& plan, const std::string& robot) {
+  for (const PriorRobotTimes& t : plan.within_prior) {
+    if (t.robot == robot) return &t;
+  }
+  return nullptr;
 }
 
 TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
@@ -180,15 +188,37 @@ TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
       Eigen::VectorXd truth = c.p;
       truth[i] += k * c.prior_sigma[i];
       if (i == 3 && k < 0) truth[i] = 0.02;  // the lag, kept physical (above)
-      const double ratio = SpeedUpFor(c, *ws, plan, usual, truth);
-      std::cout << "true " << c.sys.params()[static_cast<size_t>(i)].name << " at " << k
-                << " sigma: " << ratio << "x\n";
+      const PriorRobotTimes times = TimesFor(c, *ws, plan, usual, truth);
+      const double ratio = times.usual_s / times.plan_s;
+      const std::string robot =
+          c.sys.params()[static_cast<size_t>(i)].name + (k < 0 ? " -3 sigma" : " +3 sigma");
+      std::cout << "true " << robot << ": " << ratio << "x\n";
+      // What the plan reports for that robot is what driving it there gives; the lag's -3
+      // sigma (-0.2 s) is no robot and is not reported.
+      const PriorRobotTimes* reported = Reported(plan, robot);
+      if (i == 3 && k < 0) {
+        EXPECT_EQ(reported, nullptr);
+      } else if (reported == nullptr) {
+        ADD_FAILURE() << robot << " is not reported";
+      } else {
+        EXPECT_DOUBLE_EQ(reported->plan_s, times.plan_s) << robot;
+        EXPECT_DOUBLE_EQ(reported->usual_s, times.usual_s) << robot;
+      }
       EXPECT_GE(ratio, 1.0) << c.sys.params()[static_cast<size_t>(i)].name << " at " << k;
       ratios.push_back(ratio);
     }
   }
   std::sort(ratios.begin(), ratios.end());
   EXPECT_GE(ratios[ratios.size() / 2], 1.5) << "the median robot at 3 sigma";
+  // The design point and the 15 physical robots at 3 sigma are reported; the least
+  // speed-up among them is the left wheel's -3 sigma (measured 1.0x).
+  ASSERT_EQ(plan.within_prior.size(), 16u);
+  EXPECT_EQ(plan.within_prior[0].robot, "the design point");
+  EXPECT_DOUBLE_EQ(plan.within_prior[0].plan_s, plan.curve.time_to_target_s);
+  EXPECT_DOUBLE_EQ(plan.within_prior[0].usual_s, r.admissible * plan.curve.time_to_target_s);
+  const std::pair<double, std::string> least = LeastSpeedUp(plan);
+  EXPECT_EQ(least.second, "r_l -3 sigma");
+  EXPECT_DOUBLE_EQ(least.first, ratios.front());
 }
 
 TEST(Plan, UnicycleWithALagAndATricycle) {

@@ -25,6 +25,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kincal/control_signal.h"
@@ -95,6 +96,15 @@ struct SigmaCurve {
   bool extrapolated = false;
 };
 
+// A robot within the prior (the design point, or one at +-PlanOptions::prior_sigmas along
+// an axis of the prior): when the quickest usual motion and the plan reach the targets
+// there.
+struct PriorRobotTimes {
+  std::string robot;  // "the design point", "r_l -3 sigma", "prior axis 2 +3 sigma"
+  double usual_s = 0.0;
+  double plan_s = 0.0;  // infinity: not within the duration
+};
+
 struct Motion {
   std::string name;
   ControlSignal controls;                // from t = 0 on the signal's origin
@@ -110,7 +120,15 @@ struct Motion {
   // every_robot_stays_in was judged on): the whole motion, which a robot that needs longer
   // drives on. Empty for the others.
   ControlSignal unstopped;
+  // The plan's only (with targets and seed_with_usual): the plan driven by the robots
+  // within the prior, against the quickest usual motion at each (src/plan/within_prior.h).
+  std::vector<PriorRobotTimes> within_prior;
 };
+
+// The least speed-up over the quickest usual motion among a plan's within_prior, and the
+// robot's name; (0, "") when it has none. A plan that does not reach the targets there
+// within the duration counts 0.
+std::pair<double, std::string> LeastSpeedUp(const Motion& plan);
 
 // The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
 // `prior_cov` are the design point and its uncertainty. The controls end with a stop at
