@@ -70,6 +70,25 @@ TEST(Refine, NeverSlowerAlwaysInside) {
   EXPECT_EQ(same, segments);
 }
 
+// A segment that adds nothing (the robot at rest before a greedy design) is dropped: what
+// follows comes a segment sooner, and the targets are reached that much sooner. With no
+// value to try, no segment's value is changed and the drop alone acts.
+TEST(Refine, ASegmentThatAddsNothingIsDropped) {
+  RefineCase c;
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  const std::vector<Values> grid = CandidateControls(c.sys, c.p, c.o);
+  Design d = DesignAtStart(c.sys, c.p, c.prior, *ws, c.o);
+  ASSERT_TRUE(DesignSegments(c.sys, *ws, c.o, grid, c.prior.diagonal().cwiseSqrt(), 16, true, &d));
+  std::vector<Values> segments = {Values{0.0, 0.0}};
+  segments.insert(segments.end(), d.chosen.begin(), d.chosen.end());
+  const double before = TimeOf(c, *ws, ControlsOfSegments(segments, c.o, 2));
+  const double designed = TimeOf(c, *ws, ControlsOfSegments(d.chosen, c.o, 2));
+  ASSERT_NEAR(before, designed + c.o.segment_s, kCurveStepS + 1e-9);
+  EXPECT_EQ(RefineSegments(c.sys, c.p, c.prior, *ws, c.o, {}, 1, &segments), 1);
+  EXPECT_EQ(segments, d.chosen);
+  EXPECT_DOUBLE_EQ(TimeOf(c, *ws, ControlsOfSegments(segments, c.o, 2)), designed);
+}
+
 // The soonest of the greedy designs under each criterion, each refined: no later than any
 // of them, and every robot within the prior inside along it and a stop after it.
 TEST(Refine, DesignSoonestIsNoLaterThanAnyCriterionsDesign) {
