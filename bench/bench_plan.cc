@@ -5,26 +5,14 @@
 #include <benchmark/benchmark.h>
 
 #include "kincal/plan/planner.h"
+#include "plan/plan_cases.h"
 
 namespace kincal {
 namespace {
 
-struct Reference {
-  System sys = MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value();
-  Eigen::VectorXd p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
-  Eigen::MatrixXd prior = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05)
-                              .finished()
-                              .cwiseAbs2()
-                              .asDiagonal();
-  std::unique_ptr<Workspace> ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
-  PlanOptions o;
-  Reference() {
-    o.duration_s = 60.0;
-    o.max_abs = {20.0, 20.0};
-    o.max_accel = {40.0, 40.0};
-    o.targets = (Eigen::VectorXd(8) << 3e-5, 3e-5, 3e-4, 3e-3, 3e-3, 2e-3, 2e-3, 0.0).finished();
-    o.care = {0, 1, 2, 3, 4, 5, 6};
-  }
+// The plan layer's tests' reference robot (tests/plan/plan_cases.h), planned for 60 s.
+struct Reference : plan_testing::ReferenceRobot {
+  Reference() : ReferenceRobot(60.0) {}
 };
 
 void BM_Plan60s(benchmark::State& state) {
