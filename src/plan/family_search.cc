@@ -123,10 +123,9 @@ std::vector<Motion> BestOfFamily(const FamilyMember& member, const FamilySizes& 
 std::optional<Motion> StoppedAtTargets(const System& sys, const Eigen::VectorXd& params,
                                        const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                        const PlanOptions& o, const Motion& m) {
-  const double t = m.curve.time_to_target_s;
+  const double t = ReachedAt(m);
   const int nc = sys.num_controls();
-  if (!std::isfinite(t) || m.curve.extrapolated ||
-      t > o.duration_s - LongestStopSeconds(o, nc) + 1e-9) {
+  if (!std::isfinite(t) || t > o.duration_s - LongestStopSeconds(o, nc) + 1e-9) {
     return std::nullopt;
   }
   Motion out;

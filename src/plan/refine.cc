@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 #include "kincal/plan/design_information.h"
 #include "plan/fleet.h"
@@ -31,9 +30,7 @@ double TimeToTargets(const System& sys, const Eigen::VectorXd& params,
   m.controls = ControlsOfSegments(segments, o, sys.num_controls());
   m.segment_starts_s = {0.0};
   EvaluateMotion(sys, params, prior_cov, ws, until, kCurveStepS, &m);
-  const double t = m.curve.time_to_target_s;
-  return std::isfinite(t) && !m.curve.extrapolated ? std::min(t, until.duration_s)
-                                                   : until.duration_s;
+  return std::min(ReachedAt(m), until.duration_s);
 }
 
 // Whether the first n segments, then a stop, keep every robot within the prior inside

@@ -3,7 +3,6 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -15,12 +14,6 @@ namespace {
 
 // How much of a usual motion's time to the targets seeds a design.
 constexpr std::array<double, 3> kSeedShares = {0.5, 0.75, 1.0};
-
-// When a motion reaches the targets, or infinity.
-double ReachedAt(const Motion& m) {
-  const double t = m.curve.time_to_target_s;
-  return std::isfinite(t) && !m.curve.extrapolated ? t : std::numeric_limits<double>::infinity();
-}
 
 struct Seeded {
   Design design;

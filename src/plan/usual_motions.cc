@@ -273,6 +273,11 @@ double MotionRank(const Motion& m, const PlanOptions& o, const Eigen::VectorXd& 
   return left;
 }
 
+double ReachedAt(const Motion& m) {
+  const double t = m.curve.time_to_target_s;
+  return std::isfinite(t) && !m.curve.extrapolated ? t : std::numeric_limits<double>::infinity();
+}
+
 std::vector<Motion> UsualMotions(const System& sys, const Eigen::VectorXd& params,
                                  const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                  const PlanOptions& o) {

@@ -50,8 +50,7 @@ double TimeAt(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd
   m.controls = u;
   m.segment_starts_s = {0.0};
   EvaluateMotion(sys, p, prior_cov, ws, o, kCurveStepS, &m);
-  const double t = m.curve.time_to_target_s;
-  return std::isfinite(t) && !m.curve.extrapolated ? t : std::numeric_limits<double>::infinity();
+  return ReachedAt(m);
 }
 
 double QuickestUsual(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd& prior_cov,
@@ -59,7 +58,7 @@ double QuickestUsual(const System& sys, const Eigen::VectorXd& p, const Eigen::M
   double best = std::numeric_limits<double>::infinity();
   for (const Motion& m : usual) {
     if (m.segment_starts_s.size() != 1 || !m.stays_in || !m.every_robot_stays_in ||
-        !std::isfinite(m.curve.time_to_target_s) || m.curve.extrapolated) {
+        !std::isfinite(ReachedAt(m))) {
       continue;
     }
     // A motion stopped at the design point's targets is driven on by a robot that needs longer.

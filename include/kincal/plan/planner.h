@@ -144,6 +144,10 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
 // (sigma / prior sigma)^2).
 double MotionRank(const Motion& m, const PlanOptions& o, const Eigen::VectorXd& prior_sigma);
 
+// When an evaluated motion reaches the targets, or infinity (not within its curve, or
+// only by extrapolation).
+double ReachedAt(const Motion& m);
+
 // Whether the prior's corner robots (the design point and the robots at +-prior_sigmas
 // along each principal axis of the prior) keep their targets inside `ws` along controls
 // `u` from the start pose, checked every 0.05 s to u's last sample. (The planner's own
