@@ -45,7 +45,7 @@ void PrintWithinPrior(const Motion& plan, const PlanOptions& o, std::ostream& ou
   double most = 0.0;
   const PriorRobotTimes* worst = nullptr;
   for (const PriorRobotTimes& t : plan.within_prior) {
-    if (std::isfinite(t.plan_s) && t.plan_s > 0.0) most = std::max(most, t.usual_s / t.plan_s);
+    most = std::max(most, SpeedUp(t));
     if (t.robot == at) worst = &t;
   }
   out << std::setprecision(3) << "for the robots at +-" << o.prior_sigmas
@@ -104,12 +104,11 @@ Status WritePlanFiles(const std::string& dir, const System& sys, const Eigen::Ve
   // The plan driven by the robots within the prior, against the quickest usual motion there.
   j["within_prior"] = nlohmann::json::array();
   for (const PriorRobotTimes& t : plan.within_prior) {
-    const bool reached = std::isfinite(t.plan_s);
     j["within_prior"].push_back(
         {{"robot", t.robot},
          {"usual_s", t.usual_s},
-         {"plan_s", reached ? nlohmann::json(t.plan_s) : nlohmann::json()},
-         {"speedup", reached && t.plan_s > 0.0 ? t.usual_s / t.plan_s : 0.0}});
+         {"plan_s", std::isfinite(t.plan_s) ? nlohmann::json(t.plan_s) : nlohmann::json()},
+         {"speedup", SpeedUp(t)}});
   }
   j["usual"] = nlohmann::json::array();
   for (const auto& m : usual) j["usual"].push_back(CurveJson(m));

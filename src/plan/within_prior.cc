@@ -101,10 +101,14 @@ void JudgePlan(const System& sys, const Eigen::MatrixXd& prior_cov, const Worksp
 
 namespace kincal {
 
+double SpeedUp(const PriorRobotTimes& t) {
+  return std::isfinite(t.plan_s) && t.plan_s > 0.0 ? t.usual_s / t.plan_s : 0.0;
+}
+
 std::pair<double, std::string> LeastSpeedUp(const Motion& plan) {
   std::pair<double, std::string> least{0.0, ""};
   for (const PriorRobotTimes& t : plan.within_prior) {
-    const double s = std::isfinite(t.plan_s) && t.plan_s > 0.0 ? t.usual_s / t.plan_s : 0.0;
+    const double s = SpeedUp(t);
     if (least.second.empty() || s < least.first) least = {s, t.robot};
   }
   return least;

@@ -125,9 +125,12 @@ struct Motion {
   std::vector<PriorRobotTimes> within_prior;
 };
 
-// The least speed-up over the quickest usual motion among a plan's within_prior, and the
-// robot's name; (0, "") when it has none. A plan that does not reach the targets there
-// within the duration counts 0.
+// The plan's speed-up over the quickest usual motion at that robot: usual_s / plan_s, 0
+// when the plan does not reach the targets there within the duration.
+double SpeedUp(const PriorRobotTimes& t);
+
+// The least SpeedUp among a plan's within_prior (the first, on a tie), and the robot's
+// name; (0, "") when it has none.
 std::pair<double, std::string> LeastSpeedUp(const Motion& plan);
 
 // The plan, with its sigma curve (EvaluateMotion every kCurveStepS). `params` and
