@@ -15,6 +15,7 @@
 #include "kincal/estimation/batch.h"
 #include "kincal/sim/simulator.h"
 #include "kincal/sim/thesis_vision.h"
+#include "plan/plan_cases.h"
 #include "sim/shipped_camera.h"
 
 namespace kincal {
@@ -26,29 +27,19 @@ struct PlanCase {
   PlanOptions o;
 };
 
+// A robot the plan layer's tests share (plan_cases.h), with its prior as sigmas.
+template <typename Shared>
+PlanCase FromShared(const Shared& r) {
+  return {r.sys, r.p, r.prior.diagonal().cwiseSqrt(), r.o};
+}
+
 // The reference case: lengths to 0.1 %, lag and delay to 3 ms, lever arm to 2 mm.
 PlanCase PlanReference(double duration_s) {
-  PlanCase c{
-      MakeSystem("diffdrive", {"actuator_lag", "time_offset", "lever_arm"}).value(), {}, {}, {}};
-  c.p = (Eigen::VectorXd(8) << 0.03, 0.03, 0.3, 0.1, 0.0, 0.0, 0.0, 0.0).finished();
-  c.prior_sigma = (Eigen::VectorXd(8) << 0.003, 0.003, 0.03, 0.1, 0.1, 0.05, 0.05, 0.05).finished();
-  c.o.duration_s = duration_s;
-  c.o.max_abs = {20.0, 20.0};
-  c.o.max_accel = {40.0, 40.0};
-  c.o.targets = (Eigen::VectorXd(8) << 3e-5, 3e-5, 3e-4, 3e-3, 3e-3, 2e-3, 2e-3, 0.0).finished();
-  c.o.care = {0, 1, 2, 3, 4, 5, 6};
-  return c;
+  return FromShared(plan_testing::ReferenceRobot(duration_s));
 }
 
 PlanCase UnicycleWithLag(double duration_s) {
-  PlanCase u{MakeSystem("unicycle", {"actuator_lag"}).value(), {}, {}, {}};
-  u.p = (Eigen::VectorXd(3) << 1.0, 1.0, 0.15).finished();
-  u.prior_sigma = (Eigen::VectorXd(3) << 0.1, 0.1, 0.1).finished();
-  u.o.duration_s = duration_s;
-  u.o.max_abs = {0.5, 2.0};
-  u.o.max_accel = {1.0, 4.0};
-  u.o.targets = (Eigen::VectorXd(3) << 1e-3, 1e-3, 3e-3).finished();
-  return u;
+  return FromShared(plan_testing::UnicycleWithALag(duration_s));
 }
 
 PlanCase Tricycle(double duration_s) {
