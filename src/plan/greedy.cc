@@ -11,15 +11,6 @@ namespace {
 
 constexpr double kAnticipateS = 1.0;  // the most negative delay driven exactly (s)
 
-// One candidate driven for a segment: its controls, where they end, what is then known.
-struct Trial {
-  double score;
-  ControlSignal u;
-  Values end;
-  DesignInformation info;
-  Values value;  // the segment's control
-};
-
 // Whether `fleet` (driven along u so far) keeps inside along u to t_s, where u is at
 // `at`, and a stop from there: until every robot within the prior has come to rest (a lag
 // or a delay at the prior's 3 sigma keeps one moving for a while).
@@ -32,8 +23,8 @@ bool StopsInside(const System& sys, const Workspace& ws, const PlanOptions& o,
   return DriveFleet(sys, braked, ws, settle, kFleetCheckS, true, &fleet);
 }
 
-// Tries one candidate: drives it for a segment and a stop after it. Nothing when a robot
-// within the prior would leave the workspace.
+}  // namespace
+
 std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
                                   const Eigen::VectorXd& prior_sigma, const Values& cand,
                                   const Design& d) {
@@ -48,7 +39,17 @@ std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const 
   return Trial{score, std::move(u), at, std::move(info), cand};
 }
 
-}  // namespace
+void KeepTrial(const System& sys, const Workspace& ws, const PlanOptions& o, Trial* t, Design* d) {
+  d->u = std::move(t->u);
+  d->chosen.push_back(t->value);
+  d->now = t->end;
+  d->info = std::move(t->info);
+  d->t_s += o.segment_s;
+  // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
+  // camera clock behind the robot's) moves by commands not yet chosen, and is driven
+  // through them only when they are.
+  DriveFleet(sys, d->u, ws, std::max(0.0, d->t_s - kAnticipateS), kFleetCheckS, false, &d->fleet);
+}
 
 Design DesignAtStart(const System& sys, const Eigen::VectorXd& params,
                      const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o) {
@@ -87,15 +88,7 @@ bool DesignSegments(const System& sys, const Workspace& ws, const PlanOptions& o
       if (t && (!best || t->score < best->score)) best = std::move(t);
     }
     if (!best) return false;
-    d->u = std::move(best->u);
-    d->chosen.push_back(best->value);
-    d->now = best->end;
-    d->info = std::move(best->info);
-    d->t_s += o.segment_s;
-    // The fleet stays kAnticipateS behind the plan: a robot with a negative delay (a
-    // camera clock behind the robot's) moves by commands not yet chosen, and is driven
-    // through them only when they are.
-    DriveFleet(sys, d->u, ws, std::max(0.0, d->t_s - kAnticipateS), kFleetCheckS, false, &d->fleet);
+    KeepTrial(sys, ws, o, &*best, d);
   }
   return true;
 }

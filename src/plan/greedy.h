@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "kincal/plan/design_information.h"
@@ -37,6 +38,25 @@ Design DesignAtStart(const System& sys, const Eigen::VectorXd& params,
 // way or in a stop from there (the planner's rule).
 bool DesignFromSeed(const System& sys, const Workspace& ws, const PlanOptions& o,
                     const ControlSignal& seed, double seed_s, Design* d);
+
+// One candidate control driven for a segment from `d`: its controls, where they end, what
+// is then known at the design point and its DesignScore.
+struct Trial {
+  double score;
+  ControlSignal u;
+  Values end;
+  DesignInformation info;
+  Values value;  // the segment's control
+};
+
+// Tries candidate `cand`: drives it for a segment from d and a stop after it. Nothing when
+// a robot within the prior would leave the workspace on the way or in the stop.
+std::optional<Trial> TryCandidate(const System& sys, const Workspace& ws, const PlanOptions& o,
+                                  const Eigen::VectorXd& prior_sigma, const Values& cand,
+                                  const Design& d);
+
+// Makes trial `t` (from TryCandidate on d) d's next segment.
+void KeepTrial(const System& sys, const Workspace& ws, const PlanOptions& o, Trial* t, Design* d);
 
 // Up to `count` greedy segments from d->t_s (with `until_targets`, no more once the targets
 // are reached). False when no candidate keeps every robot within the prior inside; `d` then

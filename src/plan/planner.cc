@@ -10,6 +10,7 @@
 #include "kincal/angles.h"
 #include "plan/fleet.h"
 #include "plan/greedy.h"
+#include "plan/judged_design.h"
 #include "plan/refine.h"
 #include "plan/seeding.h"
 #include "plan/shaping.h"
@@ -293,9 +294,15 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
       plan_internal::WorstTargetRatio(d.info.Covariance(), o) <= 1.0) {
     plan_internal::DesignSoonest(sys, params, prior_cov, ws, o, grid, &d);
   }
+  // Once the design point's targets are reached, designed on for the robots within the
+  // prior that have not reached theirs (DesignForJudges), then greedily to the duration.
+  const std::vector<plan_internal::Judge> robots =
+      o.seed_with_usual ? plan_internal::RobotsToJudge(sys, params, prior_cov, o)
+                        : std::vector<plan_internal::Judge>{};
   if (ok && targets) {
-    ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma,
-                                       segments - static_cast<int>(d.chosen.size()), false, &d);
+    int left = segments - static_cast<int>(d.chosen.size());
+    left -= plan_internal::DesignForJudges(sys, prior_cov, ws, o, grid, robots, left, &d);
+    ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma, left, false, &d);
   }
   if (!ok) {
     return Status::Error("plan: no control keeps every robot within the prior inside the " +
@@ -312,7 +319,7 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     std::vector<Motion>& motions = usual != nullptr ? *usual : compared;
     auto [found, judges] = searched.get();
     motions = std::move(found);
-    plan_internal::SeedWithUsual(sys, params, prior_cov, ws, o, grid, motions, plan);
+    plan_internal::SeedWithUsual(sys, params, prior_cov, ws, o, grid, motions, robots, plan);
     KeepTheBetter(o, prior_sigma, motions, plan);
     plan_internal::JudgePlan(sys, prior_cov, ws, o, judges, plan);
   }

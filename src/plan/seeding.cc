@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "plan/greedy.h"
+#include "plan/judged_design.h"
 
 namespace kincal::plan_internal {
 namespace {
@@ -26,7 +27,7 @@ struct Seeded {
 bool SeedWithUsual(const System& sys, const Eigen::VectorXd& params,
                    const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                    const std::vector<Values>& grid, const std::vector<Motion>& usual,
-                   Motion* plan) {
+                   const std::vector<Judge>& judges, Motion* plan) {
   if (o.targets.size() == 0) return false;
   const Eigen::VectorXd prior_sigma = prior_cov.diagonal().cwiseSqrt();
   const double drive_end_s = o.duration_s - LongestStopSeconds(o, sys.num_controls());
@@ -56,9 +57,9 @@ bool SeedWithUsual(const System& sys, const Eigen::VectorXd& params,
   Design& d = best->design;
   // On to the duration; a design that finds no safe control stops where it is (each
   // segment's stop was checked).
-  DesignSegments(sys, ws, o, grid, prior_sigma,
-                 static_cast<int>(std::floor((drive_end_s - d.t_s) / o.segment_s + 1e-9)), false,
-                 &d);
+  int left = static_cast<int>(std::floor((drive_end_s - d.t_s) / o.segment_s + 1e-9));
+  left -= DesignForJudges(sys, prior_cov, ws, o, grid, judges, left, &d);
+  DesignSegments(sys, ws, o, grid, prior_sigma, left, false, &d);
   Motion seeded;
   // Named after the seed's motion (a stopped one's name says where it stopped).
   const std::string& seed = best->seed->name;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <utility>
 
 #include "plan/fleet.h"
 
@@ -70,9 +71,8 @@ double QuickestUsual(const System& sys, const Eigen::VectorXd& p, const Eigen::M
 
 }  // namespace
 
-std::vector<Judge> JudgesWithinPrior(const System& sys, const Eigen::VectorXd& params,
-                                     const Eigen::MatrixXd& prior_cov, const Workspace& ws,
-                                     const PlanOptions& o, const std::vector<Motion>& usual) {
+std::vector<Judge> RobotsToJudge(const System& sys, const Eigen::VectorXd& params,
+                                 const Eigen::MatrixXd& prior_cov, const PlanOptions& o) {
   std::vector<Judge> judges;
   if (o.targets.size() == 0) return judges;
   const Eigen::VectorXd sigma = prior_cov.diagonal().cwiseSqrt();
@@ -81,9 +81,18 @@ std::vector<Judge> JudgesWithinPrior(const System& sys, const Eigen::VectorXd& p
     const Eigen::VectorXd scaled = (robots[k] - params).cwiseQuotient(sigma);
     if (k > 0 && HeldAxis(sys, robots[k] - params, o.prior_sigmas)) continue;
     if (!Physical(sys, robots[k])) continue;
-    const double t = QuickestUsual(sys, robots[k], prior_cov, ws, o, usual);
-    if (!std::isfinite(t)) continue;
-    judges.push_back({JudgeName(sys, scaled, o.prior_sigmas, k), robots[k], t});
+    judges.push_back({JudgeName(sys, scaled, o.prior_sigmas, k), robots[k], 0.0});
+  }
+  return judges;
+}
+
+std::vector<Judge> JudgesWithinPrior(const System& sys, const Eigen::VectorXd& params,
+                                     const Eigen::MatrixXd& prior_cov, const Workspace& ws,
+                                     const PlanOptions& o, const std::vector<Motion>& usual) {
+  std::vector<Judge> judges;
+  for (Judge& j : RobotsToJudge(sys, params, prior_cov, o)) {
+    j.usual_s = QuickestUsual(sys, j.params, prior_cov, ws, o, usual);
+    if (std::isfinite(j.usual_s)) judges.push_back(std::move(j));
   }
   return judges;
 }

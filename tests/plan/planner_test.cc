@@ -167,10 +167,13 @@ TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
   EXPECT_GE(r.nominal, 1.5);
   // Issue 34: for the true robot anywhere within the prior's 3 sigma, not only at the
   // guess: each parameter at +-3 sigma, the plan and the usual motions (the stopped one
-  // driven on until it reaches the targets) evaluated at that robot. Measured 1.0x to 4.9x,
-  // 1.5x or more at 11 of the 16 robots; the issue's 1.5x everywhere is not reached (the
-  // plan, designed at the guess, needs 8 s where the robot's left wheel is 30 % smaller, as
-  // the figure-eight does: docs/plan.md). It is never worse than the best usual motion.
+  // driven on until it reaches the targets) evaluated at that robot. Measured 1.18x to
+  // 4.9x, 1.5x or more at 12 of the 16 robots (1.0x to 4.9x and 11 before the plan was
+  // designed on for the robots short of the targets). This case's prior is tighter and its
+  // wheels faster than issue 34's command (Issue34Command..., >= 1.73x everywhere): its
+  // plan reaches the targets at 4 s, before the delay's -3 sigma robot, whose best usual
+  // motion needs 6.5 s, could be served; even a plan designed at that robot itself is short of
+  // 1.5x there (docs/plan.md). It is never worse than the best usual motion.
   // The lag's -3 sigma is below zero: 0.02 s instead (-0.8 sigma); as the lag vanishes it
   // cannot be told from the delay by any motion within the acceleration limits.
   std::vector<double> ratios;
@@ -202,14 +205,54 @@ TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
   std::sort(ratios.begin(), ratios.end());
   EXPECT_GE(ratios[ratios.size() / 2], 1.5) << "the median robot at 3 sigma";
   // The design point and the 15 physical robots at 3 sigma are reported; the least
-  // speed-up among them is the left wheel's -3 sigma (measured 1.0x).
+  // speed-up among them is the delay's -3 sigma (measured 1.18x).
   ASSERT_EQ(plan.within_prior.size(), 16u);
   EXPECT_EQ(plan.within_prior[0].robot, "the design point");
   EXPECT_DOUBLE_EQ(plan.within_prior[0].plan_s, plan.curve.time_to_target_s);
   EXPECT_DOUBLE_EQ(plan.within_prior[0].usual_s, r.admissible * plan.curve.time_to_target_s);
   const std::pair<double, std::string> least = LeastSpeedUp(plan);
-  EXPECT_EQ(least.second, "r_l -3 sigma");
+  EXPECT_EQ(least.second, "delay_s -3 sigma");
   EXPECT_DOUBLE_EQ(least.first, ratios.front());
+}
+
+// Issue 34: on its own command, >= 1.5x less driving than the best usual motion for the
+// true robot anywhere within the prior's 3 sigma. Judged at the 16 robots the plan reports
+// (the design point and +-3 sigma along each axis), at the issue's true robot (both radii
+// 10 % below the guess) and at 12 robots drawn inside the 3-sigma ellipsoid. Measured:
+// 1.73x to 2.87x at the 16, least at the lag's +3 sigma (6.5 s against 11.25 s); the robot
+// with the right wheel at +3 sigma (45 % larger) 1.87x, 0.89x before the plan was designed
+// on for the robots short of the targets (src/plan/judged_design.h).
+TEST(Plan, Issue34CommandIsAtLeast1_5xFasterEverywhereWithinThePrior) {
+  const PlanCase c = FromShared(plan_testing::Issue34Command());
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  Motion plan;
+  std::vector<Motion> usual;
+  const SpeedUps r = SpeedUp(c, *ws, "issue 34's command", &plan, &usual);
+  EXPECT_GE(r.admissible, 1.5);
+  ASSERT_EQ(plan.within_prior.size(), 16u);
+  for (const PriorRobotTimes& t : plan.within_prior) {
+    std::cout << t.robot << ": the plan " << t.plan_s << " s, the usual motion " << t.usual_s
+              << " s\n";
+    EXPECT_GE(SpeedUp(t), 1.5) << t.robot;
+  }
+  Eigen::VectorXd truth = c.p;
+  truth[0] = truth[1] = 0.03;
+  const PriorRobotTimes issue = TimesFor(c, *ws, plan, usual, truth);
+  EXPECT_GE(SpeedUp(issue), 1.5) << "the issue's true robot";
+  // Inside the ellipsoid: a direction drawn uniformly, a radius up to 3 sigma (the lag kept
+  // above 0.02 s, as in the reference case).
+  std::mt19937 rng(34);
+  std::normal_distribution<double> gauss;
+  std::uniform_real_distribution<double> unit;
+  for (int k = 0; k < 12; ++k) {
+    Eigen::VectorXd dir(c.p.size());
+    for (int i = 0; i < dir.size(); ++i) dir[i] = gauss(rng);
+    const double radius = 3.0 * std::pow(unit(rng), 1.0 / static_cast<double>(dir.size()));
+    truth = c.p + radius * dir.normalized().cwiseProduct(c.prior_sigma);
+    truth[3] = std::max(truth[3], 0.02);
+    const PriorRobotTimes t = TimesFor(c, *ws, plan, usual, truth);
+    EXPECT_GE(SpeedUp(t), 1.5) << "robot " << k << ": " << truth.transpose();
+  }
 }
 
 TEST(Plan, UnicycleWithALagAndATricycle) {

@@ -36,7 +36,7 @@ TEST(Seeding, AUsualMotionsStartDesignedOnBeatsAPoorPlan) {
   AppendRest(&rest.controls, c.o.duration_s);
   EvaluateMotion(c.sys, c.p, c.prior, *c.ws, c.o, kCurveStepS, &rest);
   Motion plan = rest;
-  ASSERT_TRUE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, c.o, grid, usual, &plan));
+  ASSERT_TRUE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, c.o, grid, usual, {}, &plan));
   std::cout << plan.name << ": " << plan.curve.time_to_target_s << " s (best admissible usual "
             << admissible << " s)\n";
   EXPECT_NE(plan.name.find("then designed"), std::string::npos) << plan.name;
@@ -48,12 +48,12 @@ TEST(Seeding, AUsualMotionsStartDesignedOnBeatsAPoorPlan) {
   EXPECT_EQ(plan.controls.ValuesAt(last), (Values{}));
   // Now nothing beats it: kept.
   Motion again = plan;
-  EXPECT_FALSE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, c.o, grid, usual, &again));
+  EXPECT_FALSE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, c.o, grid, usual, {}, &again));
   EXPECT_EQ(again.name, plan.name);
   PlanOptions none = c.o;
   none.targets = Eigen::VectorXd();
   Motion same = rest;
-  EXPECT_FALSE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, none, grid, usual, &same));
+  EXPECT_FALSE(SeedWithUsual(c.sys, c.p, c.prior, *c.ws, none, grid, usual, {}, &same));
 }
 
 }  // namespace

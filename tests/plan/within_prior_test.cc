@@ -47,6 +47,10 @@ TEST(WithinPrior, JudgesTheAxisRobotsWithinThePhysicalBounds) {
   EXPECT_EQ(Names(judges),
             (std::set<std::string>{"the design point", "k_v +3 sigma", "k_v -3 sigma",
                                    "k_omega +3 sigma", "k_omega -3 sigma", "tau_s +3 sigma"}));
+  // The same robots as RobotsToJudge's (every one is reached here), which leaves usual_s 0.
+  const std::vector<Judge> robots = RobotsToJudge(c.sys, c.p, c.prior, c.o);
+  EXPECT_EQ(Names(robots), Names(judges));
+  for (const Judge& j : robots) EXPECT_EQ(j.usual_s, 0.0) << j.name;
   for (const Judge& j : judges) {
     const Eigen::VectorXd d = j.params - c.p;
     EXPECT_NEAR(d.norm(), j.name == "the design point" ? 0.0 : 0.3, 1e-12) << j.name;

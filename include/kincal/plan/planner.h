@@ -11,7 +11,8 @@
 // checked through the spread of poses they imply (to first order). With targets, the
 // design is first made up to them under each criterion and looked ahead on (the soonest
 // kept, src/plan/refine.h), and seeded with the usual motions (src/plan/seeding.h); the
-// rest of the duration is then designed on greedily.
+// rest of the duration is then designed on, first for the robots at +-k sigma along the
+// prior's axes still short of the targets (src/plan/judged_design.h), then greedily.
 //
 // Score (the parameters `care`, each scaled by its target sigma, or its prior sigma when
 // it has none): A-optimal, the sum of the scaled variances; D-optimal, the log
@@ -57,7 +58,9 @@ struct PlanOptions {
   // Never worse than the usual motions: designs seeded with each of them
   // (src/plan/seeding.h), and the best of them (UsualMotions) that keeps every robot within
   // the prior inside, replace the plan when better (MotionRank). It costs the usual
-  // motions' search (some 3 s of a second core for 60 s, run while the plan is designed);
+  // motions' search (some 3 s of a second core for 60 s, run while the plan is designed).
+  // With it too, once the design point has reached the targets, the next segments are
+  // designed for the robots within the prior that have not (src/plan/judged_design.h).
   // kincald's guidance, which plans short legs again and again, does without.
   bool seed_with_usual = true;
   // Looking ahead: with targets, the greedy designs up to them under each criterion are
