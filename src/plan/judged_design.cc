@@ -68,7 +68,8 @@ int DesignForJudges(const System& sys, const Eigen::MatrixXd& prior_cov, const W
   };
   int designed = 0;
   for (; designed < count && !open.empty(); ++designed) {
-    // Half the grid on a second core (the usual motions' search is over by now).
+    // Half the grid on a second thread (it shares the second core with the usual motions'
+    // search while that runs).
     std::future<void> half = std::async(std::launch::async, try_range, 0, grid.size() / 2);
     try_range(grid.size() / 2, grid.size());
     half.get();
