@@ -275,15 +275,19 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
                          " s before the stop (" + std::to_string(stop_s) +
                          " s from the speed limits at the acceleration limits)");
   }
+  // The robots within the prior: designed for once the design point's targets are reached
+  // (DesignForJudges), and the plan is judged at them.
+  const std::vector<plan_internal::Judge> robots =
+      o.seed_with_usual ? plan_internal::RobotsToJudge(sys, params, prior_cov, o)
+                        : std::vector<plan_internal::Judge>{};
   // The usual motions are searched on a second core while the plan is designed (they are
-  // independent until the seeds; the inputs are only read).
-  // So are the robots within the prior the plan is judged at, against those motions.
+  // independent until the seeds; the inputs are only read), and timed at those robots.
   std::future<std::pair<std::vector<Motion>, std::vector<plan_internal::Judge>>> searched;
   if (o.seed_with_usual) {
     searched = std::async(std::launch::async, [&] {
       std::vector<Motion> found = UsualMotions(sys, params, prior_cov, ws, o);
       std::vector<plan_internal::Judge> judges =
-          plan_internal::JudgesWithinPrior(sys, params, prior_cov, ws, o, found);
+          plan_internal::JudgesWithinPrior(sys, robots, prior_cov, ws, o, found);
       return std::make_pair(std::move(found), std::move(judges));
     });
   }
@@ -296,9 +300,6 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
   }
   // Once the design point's targets are reached, designed on for the robots within the
   // prior that have not reached theirs (DesignForJudges), then greedily to the duration.
-  const std::vector<plan_internal::Judge> robots =
-      o.seed_with_usual ? plan_internal::RobotsToJudge(sys, params, prior_cov, o)
-                        : std::vector<plan_internal::Judge>{};
   if (ok && targets) {
     int left = segments - static_cast<int>(d.chosen.size());
     left -= plan_internal::DesignForJudges(sys, prior_cov, ws, o, grid, robots, left, &d);

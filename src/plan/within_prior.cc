@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <utility>
 
 #include "plan/fleet.h"
 
@@ -86,13 +85,13 @@ std::vector<Judge> RobotsToJudge(const System& sys, const Eigen::VectorXd& param
   return judges;
 }
 
-std::vector<Judge> JudgesWithinPrior(const System& sys, const Eigen::VectorXd& params,
+std::vector<Judge> JudgesWithinPrior(const System& sys, const std::vector<Judge>& robots,
                                      const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                      const PlanOptions& o, const std::vector<Motion>& usual) {
   std::vector<Judge> judges;
-  for (Judge& j : RobotsToJudge(sys, params, prior_cov, o)) {
-    j.usual_s = QuickestUsual(sys, j.params, prior_cov, ws, o, usual);
-    if (std::isfinite(j.usual_s)) judges.push_back(std::move(j));
+  for (const Judge& robot : robots) {
+    const double t = QuickestUsual(sys, robot.params, prior_cov, ws, o, usual);
+    if (std::isfinite(t)) judges.push_back({robot.name, robot.params, t});
   }
   return judges;
 }

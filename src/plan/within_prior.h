@@ -25,18 +25,16 @@ struct Judge {
 };
 
 // With targets: the design point and the robots at +-o.prior_sigmas along each principal
-// axis of the prior within every parameter's physical bound, held parameters' axes
-// skipped (as JudgesWithinPrior), each named; usual_s is left 0. Empty without targets.
+// axis of the prior that are within every parameter's physical bound (a lag of -0.2 s is
+// no robot), each named; held parameters' axes move no robot and are skipped. usual_s is
+// left 0 (JudgesWithinPrior times them). Empty without targets.
 std::vector<Judge> RobotsToJudge(const System& sys, const Eigen::VectorXd& params,
                                  const Eigen::MatrixXd& prior_cov, const PlanOptions& o);
 
-// With targets: the design point and the robots at +-o.prior_sigmas along each principal
-// axis of the prior that are within every parameter's physical bound (a lag of -0.2 s is
-// no robot), each with the time the quickest motion of `usual` needs there (the continuous
-// ones every robot within the prior survives; a stopped one driven on). Held parameters'
-// axes move no robot and are skipped; so are robots no such motion brings to the targets
-// within the duration. Empty without targets.
-std::vector<Judge> JudgesWithinPrior(const System& sys, const Eigen::VectorXd& params,
+// `robots` (RobotsToJudge), each with the time the quickest motion of `usual` needs there
+// (the continuous ones every robot within the prior survives; a stopped one driven on);
+// robots no such motion brings to the targets within the duration are left out.
+std::vector<Judge> JudgesWithinPrior(const System& sys, const std::vector<Judge>& robots,
                                      const Eigen::MatrixXd& prior_cov, const Workspace& ws,
                                      const PlanOptions& o, const std::vector<Motion>& usual);
 

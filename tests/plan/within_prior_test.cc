@@ -33,6 +33,12 @@ double QuickestAt(const JudgeCase& c, const Eigen::VectorXd& q) {
   return best;
 }
 
+// The robots within the prior of (p, prior, o), each timed with the case's usual motions.
+std::vector<Judge> Judged(const JudgeCase& c, const Eigen::VectorXd& p,
+                          const Eigen::MatrixXd& prior, const PlanOptions& o) {
+  return JudgesWithinPrior(c.sys, RobotsToJudge(c.sys, p, prior, o), prior, *c.ws, o, c.usual);
+}
+
 std::set<std::string> Names(const std::vector<Judge>& judges) {
   std::set<std::string> out;
   for (const Judge& j : judges) out.insert(j.name);
@@ -43,7 +49,7 @@ std::set<std::string> Names(const std::vector<Judge>& judges) {
 // sigma (-0.15 s: no robot); each with the quickest usual motion's time there.
 TEST(WithinPrior, JudgesTheAxisRobotsWithinThePhysicalBounds) {
   const JudgeCase c;
-  const std::vector<Judge> judges = JudgesWithinPrior(c.sys, c.p, c.prior, *c.ws, c.o, c.usual);
+  const std::vector<Judge> judges = Judged(c, c.p, c.prior, c.o);
   EXPECT_EQ(Names(judges),
             (std::set<std::string>{"the design point", "k_v +3 sigma", "k_v -3 sigma",
                                    "k_omega +3 sigma", "k_omega -3 sigma", "tau_s +3 sigma"}));
@@ -67,7 +73,7 @@ TEST(WithinPrior, JudgesTheAxisRobotsWithinThePhysicalBounds) {
   EXPECT_DOUBLE_EQ(judges[0].usual_s, admissible);
   PlanOptions none = c.o;
   none.targets = Eigen::VectorXd();
-  EXPECT_TRUE(JudgesWithinPrior(c.sys, c.p, c.prior, *c.ws, none, c.usual).empty());
+  EXPECT_TRUE(Judged(c, c.p, c.prior, none).empty());
 }
 
 // A parameter held (known) moves no robot; a correlated prior's axes are named as axes.
@@ -77,13 +83,12 @@ TEST(WithinPrior, HeldParametersMoveNoRobotAndCorrelatedAxesAreNamed) {
   Eigen::MatrixXd prior = c.prior;
   PlanOptions o = c.o;
   ASSERT_TRUE(HoldParameters(c.sys, {{"k_omega", 1.0}}, &p, &prior, &o).ok());
-  EXPECT_EQ(Names(JudgesWithinPrior(c.sys, p, prior, *c.ws, o, c.usual)),
+  EXPECT_EQ(Names(Judged(c, p, prior, o)),
             (std::set<std::string>{"the design point", "k_v +3 sigma", "k_v -3 sigma",
                                    "tau_s +3 sigma"}));
   Eigen::MatrixXd correlated = c.prior;
   correlated(0, 1) = correlated(1, 0) = 0.008;
-  const std::set<std::string> names =
-      Names(JudgesWithinPrior(c.sys, c.p, correlated, *c.ws, c.o, c.usual));
+  const std::set<std::string> names = Names(Judged(c, c.p, correlated, c.o));
   EXPECT_EQ(names.count("tau_s +3 sigma"), 1u);
   EXPECT_EQ(names.count("k_v +3 sigma"), 0u);
   int axes = 0;
@@ -95,7 +100,7 @@ TEST(WithinPrior, HeldParametersMoveNoRobotAndCorrelatedAxesAreNamed) {
 // evaluation at that robot gives; a plan that stays at rest reaches no target.
 TEST(WithinPrior, JudgePlanDrivesThePlanByEachRobot) {
   const JudgeCase c;
-  const std::vector<Judge> judges = JudgesWithinPrior(c.sys, c.p, c.prior, *c.ws, c.o, c.usual);
+  const std::vector<Judge> judges = Judged(c, c.p, c.prior, c.o);
   Motion plan;
   PlanOptions o = c.o;
   o.seed_with_usual = false;
