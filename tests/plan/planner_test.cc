@@ -183,7 +183,7 @@ TEST(Plan, ReferenceCaseReachesTheTargetsFasterThanEveryUsualMotion) {
       truth[i] += k * c.prior_sigma[i];
       if (i == 3 && k < 0) truth[i] = 0.02;  // the lag, kept physical (above)
       const PriorRobotTimes times = TimesFor(c, *ws, plan, usual, truth);
-      const double ratio = times.usual_s / times.plan_s;
+      const double ratio = SpeedUp(times);
       const std::string robot =
           c.sys.params()[static_cast<size_t>(i)].name + (k < 0 ? " -3 sigma" : " +3 sigma");
       std::cout << "true " << robot << ": " << ratio << "x\n";
