@@ -19,10 +19,10 @@ namespace kincal::plan_internal {
 // reaches them at its design point (time T), the design seeded with it for each share of T
 // in kSeedShares (DesignFromSeed; shares whose drive takes a robot within the prior out
 // are skipped), designed on greedily until the targets are reached. The seeded design
-// that reaches them soonest is designed on to the duration (first for the `judges` short of
-// them, DesignForJudges); it replaces `plan`
-// (evaluated) when it ranks better (MotionRank), named after its seed. Returns whether it
-// did. Without targets, nothing is done.
+// that reaches them soonest is designed on to the duration (first for the `judges` short
+// of them, DesignForJudges); it replaces `plan` (evaluated) when it ranks better
+// (MotionRank), named after its seed. Returns whether it did. Without targets, nothing is
+// done.
 bool SeedWithUsual(const System& sys, const Eigen::VectorXd& params,
                    const Eigen::MatrixXd& prior_cov, const Workspace& ws, const PlanOptions& o,
                    const std::vector<Values>& grid, const std::vector<Motion>& usual,
