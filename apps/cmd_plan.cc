@@ -22,8 +22,8 @@ namespace kincal::app {
 namespace {
 
 struct PlanArgs {
-  std::string model, effects, init, checkpoint, report, camera, floor, target, arena, pose_sigma,
-      limits, targets, care, fix, criterion = "targets", out;
+  std::string model, effects, init, prior, checkpoint, report, camera, floor, target, arena,
+      pose_sigma, limits, targets, care, fix, criterion = "targets", out;
   double pose_rate_hz = 15.0, duration_s = 60.0, rate_hz = 20.0, segment_s = 0.5,
          target_height_m = 0.1, margin_px = 10.0;
   bool publish = false, no_plot = false, advise = false;
@@ -188,6 +188,8 @@ int Run(const PlanArgs& a) {
   Eigen::VectorXd p;
   Eigen::MatrixXd prior;
   DesignPoint(*sys, a, &p, &prior);
+  if (const Status s = SetPriorSigma(*sys, ParseMap(a.prior, "--prior"), &prior); !s.ok())
+    throw std::runtime_error("--" + s.message());
   PlanOptions o = OptionsFrom(*sys, a);
   if (const Status s = HoldParameters(*sys, ParseMap(a.fix, "--fix"), &p, &prior, &o); !s.ok())
     throw std::runtime_error("--" + s.message());
@@ -225,6 +227,9 @@ Command AddPlan(CLI::App& app) {
   app.add_option("--model", a->model, "kinematic model")->required();
   app.add_option("--effects", a->effects, "declared effects, e.g. actuator_lag,time_offset");
   app.add_option("--init", a->init, "design point, name=value,... (prior: the generic sigma)");
+  app.add_option("--prior", a->prior,
+                 "the prior's sigma of named parameters, name=sigma,... (over the generic sigma "
+                 "or the checkpoint's)");
   app.add_option("--fix", a->fix, "model parameters known (held, not planned for), name=value,...");
   app.add_option("--checkpoint", a->checkpoint,
                  "a kincald checkpoint: design point and covariance");

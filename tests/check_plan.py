@@ -2,7 +2,7 @@
 """cli.plan: `kincal plan` on the reference case writes plan.csv (t and the model's
 controls, within the limits), plan.json (every motion's curve) and plan.png, and the plan
 reaches the targets before every usual motion that stays in; plan.json and the summary
-say how the plan does for the robots within the prior.
+say how the plan does for the robots within the prior. --prior sets the prior's sigma.
 
 Usage: check_plan.py KINCAL OUT_DIR
 """
@@ -54,7 +54,25 @@ def main() -> int:
     assert f"least at {least['robot']} (" in r.stdout, least
     assert os.path.getsize(os.path.join(out, "plan.png")) > 10000
     print(f"check_plan: plan {plan} s, usual {sorted(usual)}")
+    return check_prior(kincal, out + "_prior")
+
+
+def check_prior(kincal: str, out: str) -> int:
+    """--prior: the named parameter's sigma is the plan's prior (plan.json), the others
+    keep the generic one."""
+    generic, told = prior_sigma(kincal, out, []), prior_sigma(kincal, out, ["--prior", "k_v=0.02"])
+    assert told == [0.02, generic[1]] and generic[0] != 0.02, (generic, told)
+    print(f"check_plan: prior sigma {generic} generic, {told} with --prior k_v=0.02")
     return 0
+
+
+def prior_sigma(kincal: str, out: str, extra: list) -> list:
+    cmd = [kincal, "plan", "--model", "unicycle", "--arena=-1,-1,1,1", "--limits", "v=1,omega=2",
+           "--duration", "5", "--no-plot", "--out", out] + extra
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    assert r.returncode == 0, (cmd, r.stdout, r.stderr)
+    with open(os.path.join(out, "plan.json")) as f:
+        return json.load(f)["prior_sigma"]
 
 
 if __name__ == "__main__":

@@ -151,6 +151,26 @@ std::vector<Values> CandidateControls(const System& sys, const Eigen::VectorXd& 
   return out;
 }
 
+Status SetPriorSigma(const System& sys, const std::map<std::string, double>& sigma,
+                     Eigen::MatrixXd* prior_cov) {
+  // Every entry checked before any is set: an error leaves the prior as it was.
+  for (const auto& [name, s] : sigma) {
+    if (sys.ParamIndex(name) < 0 || !std::isfinite(s) || s <= 0.0) {
+      return Status::Error(
+          "prior: '" + name + "' is not a parameter of this " + std::string(sys.model().name()) +
+          " system with a finite, positive sigma (its parameters: " + ParamNames(sys.params()) +
+          ")");
+    }
+  }
+  for (const auto& [name, s] : sigma) {
+    const int i = sys.ParamIndex(name);
+    prior_cov->row(i).setZero();
+    prior_cov->col(i).setZero();
+    (*prior_cov)(i, i) = s * s;
+  }
+  return {};
+}
+
 Status HoldParameters(const System& sys, const std::map<std::string, double>& fixed,
                       Eigen::VectorXd* params, Eigen::MatrixXd* prior_cov, PlanOptions* o) {
   if (fixed.empty()) return {};

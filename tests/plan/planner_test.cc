@@ -119,6 +119,34 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
                    .ok());
 }
 
+// --prior: the named parameters' sigma replaces the generic one (or the checkpoint's),
+// their correlations dropped; the others are left as they were.
+TEST(Plan, PriorSigmaOfNamedParameters) {
+  std::unique_ptr<System> sys;
+  ASSERT_TRUE(MakeSystem("diffdrive", {"actuator_lag"}, {}, &sys).ok());
+  Eigen::MatrixXd prior = Eigen::MatrixXd::Identity(4, 4) * 0.01;
+  prior(0, 3) = prior(3, 0) = 0.002;
+  ASSERT_TRUE(SetPriorSigma(*sys, {{"tau_s", 0.02}, {"r_r", 0.001}}, &prior).ok());
+  EXPECT_DOUBLE_EQ(prior(3, 3), 0.02 * 0.02);
+  EXPECT_DOUBLE_EQ(prior(1, 1), 0.001 * 0.001);
+  EXPECT_EQ(prior(0, 3), 0.0);
+  EXPECT_EQ(prior(3, 0), 0.0);
+  EXPECT_EQ(prior(0, 0), 0.01);
+  EXPECT_EQ(prior(2, 2), 0.01);
+  const Eigen::MatrixXd before = prior;
+  for (const auto& bad : std::vector<std::map<std::string, double>>{{{"r_l", 0.002}, {"tau", 0.02}},
+                                                                    {{"tau_s", 0.0}},
+                                                                    {{"d", -0.01}, {"r_l", 0.002}},
+                                                                    {{"d", std::nan("")}}}) {
+    const Status s = SetPriorSigma(*sys, bad, &prior);
+    EXPECT_NE(s.message().find("is not a parameter of this diffdrive system with a finite, "
+                               "positive sigma (its parameters: r_l, r_r, d, tau_s)"),
+              std::string::npos)
+        << s.message();
+  }
+  EXPECT_EQ(prior, before) << "an error changes nothing";
+}
+
 // The plan and the usual motions that keep every robot within the prior inside, driven by
 // a true robot other than the design point: their times to the targets (their sigma
 // curves evaluated at that robot; the controls are the same).

@@ -89,6 +89,13 @@ inline constexpr double kHeldSigmaFraction = 1e-6;
 Status HoldParameters(const System& sys, const std::map<std::string, double>& fixed,
                       Eigen::VectorXd* params, Eigen::MatrixXd* prior_cov, PlanOptions* o);
 
+// The prior's sigma of named parameters (`kincal plan --prior`), over what `prior_cov`
+// held: each named parameter's variance is set and its correlations with the others
+// dropped. An unknown name, or a sigma not finite and positive, is an error naming the
+// system's parameters.
+Status SetPriorSigma(const System& sys, const std::map<std::string, double>& sigma,
+                     Eigen::MatrixXd* prior_cov);
+
 // Predicted sigma of every parameter against driving time.
 struct SigmaCurve {
   std::vector<double> t_s;
