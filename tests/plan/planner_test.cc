@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <iostream>
+#include <numbers>
 #include <random>
 
 #include "kincal/angles.h"
@@ -16,6 +17,7 @@
 #include "kincal/sim/simulator.h"
 #include "kincal/sim/thesis_vision.h"
 #include "plan/plan_cases.h"
+#include "plan/shaping.h"
 #include "sim/shipped_camera.h"
 
 namespace kincal {
@@ -387,15 +389,13 @@ struct ErrorTally {
   }
 };
 
-// Batch fits of simulated runs of the plan (truth drawn near the design point, Gaussian
-// poses): each parameter's error spread is its predicted sigma within 35 %, pooled within
-// 20 %, and the errors lie inside 3 sigma.
-void ExpectPredictedSigmaGaussian(const PlanCase& c, int trials, uint64_t seed, const char* label) {
-  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+// Batch fits of simulated runs of `m` (truth drawn near the design point, Gaussian poses):
+// each parameter's error spread is its predicted sigma (m's curve at its end) within 35 %,
+// pooled within 20 %, and the errors lie inside 3 sigma.
+void ExpectRealisedSigma(const PlanCase& c, const Motion& m, int trials, uint64_t seed,
+                         const char* label) {
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
-  Motion plan;
-  ASSERT_TRUE(PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan).ok());
-  const Eigen::VectorXd predicted = plan.curve.sigma.back();
+  const Eigen::VectorXd predicted = m.curve.sigma.back();
   const Eigen::Vector3d sigma = c.o.info.pose_sigma;
   std::vector<TimeNs> times;
   for (double t = 0.0; t <= c.o.duration_s + 1e-9; t += 1.0 / c.o.info.pose_rate_hz) {
@@ -405,17 +405,17 @@ void ExpectPredictedSigmaGaussian(const PlanCase& c, int trials, uint64_t seed, 
   std::normal_distribution<double> g(0.0, 1.0);
   ErrorTally tally(ScoredParams(c.o, static_cast<int>(c.p.size())), predicted);
   for (int k = 0; k < trials; ++k) {
-    // The truth drawn from the prior the plan was made for.
+    // The truth drawn from the prior the motion was made for.
     Eigen::VectorXd truth = c.p;
     for (int i = 0; i < truth.size(); ++i) truth[i] += 0.1 * c.prior_sigma[i] * g(rng);
     const VecN<kMaxState> tv = truth;
     const auto traj = SimulateTruth(
         c.sys, c.sys.MakeState(0, 0, 0, tv, ControlSignal(c.sys.num_controls(), 0), 0.0),
-        plan.controls, times);
+        m.controls, times);
     const auto meas = MeasurePoses(traj, sigma.cwiseAbs2().asDiagonal(), 0, rng);
     BatchOptions bo;
     bo.prior = ParamPrior{c.p, prior};
-    const BatchResult b = FitBatch(c.sys, plan.controls, meas, c.p, bo);
+    const BatchResult b = FitBatch(c.sys, m.controls, meas, c.p, bo);
     ASSERT_TRUE(b.status.ok()) << b.status.message();
     tally.Add(b.params, truth);
   }
@@ -431,13 +431,79 @@ void ExpectPredictedSigmaGaussian(const PlanCase& c, int trials, uint64_t seed, 
   EXPECT_GE(tally.inside, tally.total * 97 / 100);
 }
 
+// The plan's predicted sigma, realised (ExpectRealisedSigma).
+void ExpectPredictedSigmaGaussian(const PlanCase& c, int trials, uint64_t seed, const char* label) {
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  Motion plan;
+  ASSERT_TRUE(PlanMotion(c.sys, c.p, prior, *ws, c.o, &plan).ok());
+  ExpectRealisedSigma(c, plan, trials, seed, label);
+}
+
 TEST(Plan, RealisedSigmaIsThePredictedSigma) {
   ExpectPredictedSigmaGaussian(PlanReference(15.0), 40, 8, "diffdrive + lag, delay, lever arm");
+}
+
+// The motion the plan is compared with is held to the same account: the best figure-eight
+// of the reference case (stopped once at the targets), fitted as the plan is. A predicted
+// sigma too large for the usual motions would flatter every speed-up. Its lag and delay
+// are what keep it from the targets: each ramp between the two circles shifts the response
+// about as a delay does, and only the ramps' ends tell the lag from the delay.
+TEST(Plan, RealisedSigmaIsThePredictedSigmaForTheBestFigureEight) {
+  const PlanCase c = PlanReference(15.0);
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();
+  const std::vector<Motion> usual = UsualMotions(c.sys, c.p, prior, *ws, c.o);
+  const auto eight = std::find_if(usual.begin(), usual.end(), [](const Motion& m) {
+    return m.name.starts_with("figure-eight") && m.every_robot_stays_in;
+  });
+  ASSERT_NE(eight, usual.end());
+  std::cout << eight->name << "\n";
+  ExpectRealisedSigma(c, *eight, 40, 11, "the best figure-eight");
 }
 
 TEST(Plan, RealisedSigmaIsThePredictedSigmaForAUnicycleAndATricycle) {
   ExpectPredictedSigmaGaussian(UnicycleWithLag(8.0), 40, 9, "unicycle + lag");
   ExpectPredictedSigmaGaussian(Tricycle(8.0), 40, 10, "tricycle");
+}
+
+// Issue 34's evaluator measured that a figure-eight of two 0.2 m circles at full wheel
+// speed reaches its targets in 7.13 s at the issue's true robot. By this planner's account
+// (whose figure-eights the test above confirms by fits) that holds only when the wheels
+// switch between the circles in steps: at the command's 20 rad/s^2 each switch is a 0.64 s
+// ramp, which shifts the response about as a delay does, and the lag and the delay are
+// still 1.7x their targets at 7.25 s.
+double TwoCirclesTimeToTargets(double accel, double radius) {
+  PlanCase c = FromShared(plan_testing::Issue34Command());
+  c.o.max_accel = {accel, accel};
+  const auto ws = MakeArena(-1.5, -1.0, 1.5, 1.0);
+  Eigen::VectorXd truth = c.p;
+  truth[0] = truth[1] = 0.03;
+  // The outer wheel at its limit.
+  const double v = 0.999 * c.o.max_abs[0] * truth[0] * radius / (radius + 0.5 * truth[2]);
+  Motion m;
+  m.controls = ControlSignal(2, 0);
+  m.segment_starts_s = {0.0};
+  plan_internal::Values now{};
+  const double loop_s = 2.0 * std::numbers::pi * radius / v;
+  double t = 0.0;
+  for (int k = 0; t < 50.0; ++k, t += loop_s) {
+    plan_internal::Values to{};
+    EXPECT_TRUE(
+        plan_internal::TwistToControls(c.sys, truth, v, (k % 2 ? -v : v) / radius, c.o, &to));
+    plan_internal::AppendSlewed(&m.controls, t, t + loop_s, to, c.o, &now);
+  }
+  plan_internal::AppendStopAndRest(&m.controls, t, c.o.duration_s, c.o, &now);
+  EvaluateMotion(c.sys, truth, c.prior_sigma.cwiseAbs2().asDiagonal(), *ws, c.o, kCurveStepS, &m);
+  EXPECT_TRUE(m.stays_in);
+  std::cout << "two circles of " << radius << " m, wheels at " << accel
+            << " rad/s^2: " << m.curve.time_to_target_s << " s\n";
+  return m.curve.time_to_target_s;
+}
+
+TEST(Plan, TheIssuesFigureEightReachesTheTargetsIn7sOnlyWithSteps) {
+  EXPECT_NEAR(TwoCirclesTimeToTargets(1e4, 0.2), 7.13, 0.5);  // measured 7.25 s
+  EXPECT_GT(TwoCirclesTimeToTargets(20.0, 0.2), 14.0);        // 15.5 s
 }
 
 // The pose noise of a camera's images, over poses across the view: the scatter of the
