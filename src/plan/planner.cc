@@ -25,6 +25,13 @@ Eigen::VectorXd PriorSigma(const Eigen::MatrixXd& prior_cov) {
   return prior_cov.diagonal().cwiseSqrt();
 }
 
+// Parameter i's prior sigma set to `sigma`, uncorrelated with the others.
+void SetSigmaAlone(int i, double sigma, Eigen::MatrixXd* prior_cov) {
+  prior_cov->row(i).setZero();
+  prior_cov->col(i).setZero();
+  (*prior_cov)(i, i) = sigma * sigma;
+}
+
 }  // namespace
 
 bool EveryRobotStaysIn(const System& sys, const Eigen::VectorXd& params,
@@ -162,12 +169,7 @@ Status SetPriorSigma(const System& sys, const std::map<std::string, double>& sig
           ")");
     }
   }
-  for (const auto& [name, s] : sigma) {
-    const int i = sys.ParamIndex(name);
-    prior_cov->row(i).setZero();
-    prior_cov->col(i).setZero();
-    (*prior_cov)(i, i) = s * s;
-  }
+  for (const auto& [name, s] : sigma) SetSigmaAlone(sys.ParamIndex(name), s, prior_cov);
   return {};
 }
 
@@ -185,10 +187,8 @@ Status HoldParameters(const System& sys, const std::map<std::string, double>& fi
                            " with a finite value (its parameters: " + known + ")");
     }
     (*params)[i] = v;
-    const double s = kHeldSigmaFraction * sys.params()[static_cast<size_t>(i)].default_sigma;
-    prior_cov->row(i).setZero();
-    prior_cov->col(i).setZero();
-    (*prior_cov)(i, i) = s * s;
+    SetSigmaAlone(i, kHeldSigmaFraction * sys.params()[static_cast<size_t>(i)].default_sigma,
+                  prior_cov);
     held[static_cast<size_t>(i)] = true;
   }
   if (static_cast<int>(fixed.size()) >= model.num_params()) {
