@@ -275,8 +275,8 @@ TEST(Plan, Issue34CommandIs1_5xFasterAtThePriorsAxesAndMostlyInside) {
   // surface), the lag kept above 0.02 s as in the reference case. Measured: 1.19x to 4.4x;
   // 190 of the 200 at 1.5x or more, the 10 short of it all near the surface (2.3 to 3
   // sigma), mostly a wheel smaller and the lag longer, where the quickest usual motion needs
-  // only 9 to 12 s. (A plan designed at the least of them, told the truth, is itself 1.52x
-  // there against the usual motions searched for it.)
+  // only 9 to 12 s. (A plan designed at each of the ten, told the truth, is itself short of
+  // 1.5x at five of them: docs/plan.md.)
   std::mt19937 rng(34);
   std::normal_distribution<double> gauss;
   std::uniform_real_distribution<double> unit;
