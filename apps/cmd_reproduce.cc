@@ -242,7 +242,12 @@ Command AddReproduce(CLI::App& app) {
     }
     std::cout << "Reproducing McNamee (2003) ch. 6: " << o.runs << " experiments, " << o.trials
               << " trial(s), seed " << o.seed << "\n";
-    const ThesisResult r = ReproduceThesis(o);
+    const StatusOr<ThesisResult> reproduced = ReproduceThesis(o);
+    if (!reproduced.ok()) {
+      std::cerr << "kincal reproduce: " << reproduced.status().message() << "\n";
+      return 1;
+    }
+    const ThesisResult& r = reproduced.value();
     PrintSetup(o, r);
     PrintJoint(r);
     PrintPerRun(r);

@@ -29,7 +29,14 @@ void BM_ThesisAccuracy(benchmark::State& state) {
   o.seed = 2003;
   o.per_run = false;
   ThesisResult r;
-  for (auto _ : state) r = ReproduceThesis(o);
+  for (auto _ : state) {
+    StatusOr<ThesisResult> run = ReproduceThesis(o);
+    if (!run.ok()) {
+      state.SkipWithError(run.status().message().c_str());
+      return;
+    }
+    r = std::move(run).value();
+  }
   state.counters["bound_pct"] = r.joint_bound_nnde_percent;
   for (const auto& [name, v] : r.joint_nnde_percent) {
     state.counters[name + "_pct"] = v;

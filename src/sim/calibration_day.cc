@@ -3,7 +3,6 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 #include <vector>
 
 #include "kincal/vision/calibration.h"
@@ -64,14 +63,14 @@ std::vector<vision::CalibrationView> Views(const vision::CameraModel& camera,
 }
 
 // The camera and floor the views calibrate to (the first view's board is the floor).
-ThesisVision Calibrate(const ThesisVision& base, const std::vector<vision::CalibrationView>& views,
-                       vision::CalibrationResult* result) {
+StatusOr<ThesisVision> Calibrate(const ThesisVision& base,
+                                 const std::vector<vision::CalibrationView>& views,
+                                 vision::CalibrationResult* result) {
   vision::CalibrationOptions co;
   co.width = base.camera.width;
   co.height = base.camera.height;
   auto cal = vision::CalibrateCamera(views, co);
-  if (!cal.ok())
-    throw std::runtime_error("the day's camera calibration: " + cal.status().message());
+  if (!cal.ok()) return Status::Error("the day's camera calibration: " + cal.status().message());
   *result = std::move(cal).value();
   ThesisVision day = base;
   day.camera = result->camera;
@@ -84,13 +83,15 @@ constexpr int kBootstrapDraws = 16;
 
 }  // namespace
 
-CalibratedDay CalibrateDay(const ThesisVision& truth, const CameraCalibrationErrors& o,
-                           double centroid_sigma_px, std::mt19937_64& rng) {
+StatusOr<CalibratedDay> CalibrateDay(const ThesisVision& truth, const CameraCalibrationErrors& o,
+                                     double centroid_sigma_px, std::mt19937_64& rng) {
   const std::vector<Eigen::Vector3d> board = BoardPoints(o);
   vision::CalibrationResult cal;
-  CalibratedDay day;
-  day.vision = Calibrate(
+  StatusOr<ThesisVision> first = Calibrate(
       truth, Views(truth.camera, BoardPoses(truth, o), board, centroid_sigma_px, rng), &cal);
+  if (!first.ok()) return first.status();
+  CalibratedDay day;
+  day.vision = std::move(first).value();
   // The noise the residuals show, per axis (rms_px is over both axes; dof corrected).
   const int params = 8 + 6 * static_cast<int>(cal.board_poses.size());
   const double sigma =
@@ -100,9 +101,10 @@ CalibratedDay CalibrateDay(const ThesisVision& truth, const CameraCalibrationErr
   std::vector<double> scales;
   for (int k = 0; k < kBootstrapDraws; ++k) {
     vision::CalibrationResult again;
-    const ThesisVision redo =
+    const StatusOr<ThesisVision> redo =
         Calibrate(truth, Views(day.vision.camera, cal.board_poses, board, sigma, rng), &again);
-    scales.push_back(std::abs(CompareFloorMaps(day.vision, redo).scale));
+    if (!redo.ok()) return Status::Error(redo.status().message() + " (its bootstrap)");
+    scales.push_back(std::abs(CompareFloorMaps(day.vision, redo.value()).scale));
   }
   std::nth_element(scales.begin(), scales.begin() + kBootstrapDraws / 2, scales.end());
   day.scale_sigma = 1.4826 * scales[kBootstrapDraws / 2];

@@ -44,14 +44,14 @@ Eigen::Vector3d MapPose(const ThesisVision& reference, const ThesisVision& calib
 // One day's calibration of `truth` (camera and floor) from views whose centres scatter by
 // `centroid_sigma_px` per axis, and what the calibration itself says of its floor's scale:
 // its 1-sigma from a parametric bootstrap (the views re-imaged through the calibration with
-// the noise its residuals show, and calibrated again; no truth used). Throws
-// std::runtime_error when the calibration fails (a board out of view: a bug in the design,
-// not in the data).
+// the noise its residuals show, and calibrated again; no truth used). An error when a
+// calibration fails (a board out of view, or centres too noisy to calibrate from), naming
+// which.
 struct CalibratedDay {
   ThesisVision vision;
   double scale_sigma = 0.0;
 };
-CalibratedDay CalibrateDay(const ThesisVision& truth, const CameraCalibrationErrors& o,
-                           double centroid_sigma_px, std::mt19937_64& rng);
+StatusOr<CalibratedDay> CalibrateDay(const ThesisVision& truth, const CameraCalibrationErrors& o,
+                                     double centroid_sigma_px, std::mt19937_64& rng);
 
 }  // namespace kincal

@@ -189,16 +189,18 @@ void MeasureRun(const System& truth, const Eigen::Vector3d& params, const Thesis
   StampOnTick(o, run);
 }
 
-ThesisDesign RealisticDesign(const System& truth, const Eigen::Vector3d& params,
-                             const ThesisOptions& o, const Eigen::Matrix3d& R,
-                             PixelPoseMeter* meter, std::mt19937_64& rng) {
+StatusOr<ThesisDesign> RealisticDesign(const System& truth, const Eigen::Vector3d& params,
+                                       const ThesisOptions& o, const Eigen::Matrix3d& R,
+                                       PixelPoseMeter* meter, std::mt19937_64& rng) {
   ThesisDesign d;
   d.gains = DrawGains(o.wheel, rng);
   TimeNs t = 0;
   for (int k = 0; k < o.runs; ++k) {
     if (meter != nullptr && o.pixel.calibration.enabled &&
         k % o.pixel.calibration.runs_per_day == 0) {
-      meter->BeginDay();
+      const Status day = meter->BeginDay();
+      if (!day.ok())
+        return Status::Error("experiment " + std::to_string(k + 1) + ": " + day.message());
       d.days.push_back({CompareFloorMaps(meter->vision(), meter->calibrated()),
                         meter->calibrated_scale_sigma(), 0});
     }
@@ -234,9 +236,9 @@ ThesisDesign RealisticDesign(const System& truth, const Eigen::Vector3d& params,
 
 }  // namespace
 
-ThesisDesign MakeThesisDesign(const System& truth, const Eigen::Vector3d& params,
-                              const ThesisOptions& o, const Eigen::Matrix3d& R,
-                              PixelPoseMeter* meter, std::mt19937_64& rng) {
+StatusOr<ThesisDesign> MakeThesisDesign(const System& truth, const Eigen::Vector3d& params,
+                                        const ThesisOptions& o, const Eigen::Matrix3d& R,
+                                        PixelPoseMeter* meter, std::mt19937_64& rng) {
   if (o.frames_per_run == 0 && meter == nullptr) return IdealDesign(truth, params, o, R, rng);
   return RealisticDesign(truth, params, o, R, meter, rng);
 }

@@ -48,9 +48,10 @@ struct ThesisDesign {
 };
 
 // `params` is the true robot; `R` the pose covariance of the Gaussian measurements (unused
-// with a meter); `meter` measures through pixels when given.
-ThesisDesign MakeThesisDesign(const System& truth, const Eigen::Vector3d& params,
-                              const ThesisOptions& o, const Eigen::Matrix3d& R,
-                              PixelPoseMeter* meter, std::mt19937_64& rng);
+// with a meter); `meter` measures through pixels when given. An error when a day's camera
+// calibration fails (PixelPoseMeter::BeginDay), naming the experiment.
+StatusOr<ThesisDesign> MakeThesisDesign(const System& truth, const Eigen::Vector3d& params,
+                                        const ThesisOptions& o, const Eigen::Matrix3d& R,
+                                        PixelPoseMeter* meter, std::mt19937_64& rng);
 
 }  // namespace kincal

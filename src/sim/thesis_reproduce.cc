@@ -2,7 +2,6 @@
 // the joint and per-experiment calibrations of every estimator, and the bound.
 #include <cmath>
 #include <memory>
-#include <stdexcept>
 
 #include "kincal/check.h"
 #include "kincal/estimation/online_calibrator.h"
@@ -296,11 +295,26 @@ void FinishPoses(const PoseErrorStats& poses, ThesisResult* res) {
   }
 }
 
+// The realistic world's meter (none without pixels), its image noise in `res`.
+StatusOr<std::unique_ptr<PixelPoseMeter>> MakeMeter(const ThesisOptions& o, std::mt19937_64& rng,
+                                                    ThesisResult* res) {
+  if (!o.pixels) return std::unique_ptr<PixelPoseMeter>();
+  PixelPoseOptions po = o.pixel;
+  po.calibration.seed = o.seed ^ 0x5eed0ca11b4a7e5ULL;  // the days' stream, from the world's seed
+  StatusOr<std::unique_ptr<PixelPoseMeter>> made =
+      PixelPoseMeter::Make(ThesisTable63Vision(), po, rng);
+  if (made.ok()) {
+    res->image_noise_grey = made.value()->image_noise_grey();
+    res->centroid_sigma_px = made.value()->measured_centroid_sigma_px();
+  }
+  return made;
+}
+
 }  // namespace
 
-ThesisResult ReproduceThesis(const ThesisOptions& o) {
+StatusOr<ThesisResult> ReproduceThesis(const ThesisOptions& o) {
   std::string error;
-  if (!o.IsValid(&error)) throw std::invalid_argument("thesis: " + error);
+  if (!o.IsValid(&error)) return Status::Error("thesis: " + error);
   const System sys = MakeSystem("diffdrive").value();
   const Eigen::Vector3d nominal(kThesisRL, kThesisRR, kThesisD);
   const Eigen::Matrix3d R = IdealPoseCovariance(o);
@@ -314,14 +328,9 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
 
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  std::unique_ptr<PixelPoseMeter> meter;
-  if (o.pixels) {
-    PixelPoseOptions po = o.pixel;
-    po.calibration.seed = o.seed ^ 0x5eed0ca11b4a7e5ULL;  // the days' stream, from the world's seed
-    meter = std::make_unique<PixelPoseMeter>(ThesisTable63Vision(), po, rng);
-    res.image_noise_grey = meter->image_noise_grey();
-    res.centroid_sigma_px = meter->measured_centroid_sigma_px();
-  }
+  StatusOr<std::unique_ptr<PixelPoseMeter>> made = MakeMeter(o, rng, &res);
+  if (!made.ok()) return Status::Error("thesis: " + made.status().message());
+  const std::unique_ptr<PixelPoseMeter> meter = std::move(made).value();
   const GainModel gm = o.nuisance_gains ? MakeGainModel(sys, o) : GainModel{};
   JointTally joint(nominal);
   PerRunTally per_run;
@@ -334,7 +343,9 @@ ThesisResult ReproduceThesis(const ThesisOptions& o) {
       const Eigen::Vector3d tol(kThesisTolR, kThesisTolR, kThesisTolD);
       for (int i = 0; i < 3; ++i) truth[i] += tol[i] * gauss(rng);
     }
-    const ThesisDesign d = MakeThesisDesign(sys, truth, o, R, meter.get(), rng);
+    StatusOr<ThesisDesign> designed = MakeThesisDesign(sys, truth, o, R, meter.get(), rng);
+    if (!designed.ok()) return Status::Error("thesis: " + designed.status().message());
+    const ThesisDesign& d = *designed;
     Eigen::Vector3d guess = nominal;
     if (!o.nominal_start) {
       for (int i = 0; i < 3; ++i) guess[i] = truth[i] * (1.0 + o.guess_error * gauss(rng));

@@ -5,7 +5,6 @@
 #include <array>
 #include <cmath>
 #include <numbers>
-#include <stdexcept>
 
 #include "kincal/vision/floor_pose_solver.h"
 #include "sim/calibration_day.h"
@@ -124,31 +123,42 @@ bool PixelPoseOptions::IsValid(std::string* error) const {
   return true;
 }
 
-PixelPoseMeter::PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& options,
-                               std::mt19937_64& rng)
+PixelPoseMeter::PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& options)
     : vision_(std::move(vision)),
       calibrated_(vision_),
       options_(options),
       day_rng_(options.calibration.seed),
-      tracker_(vision_.camera, vision_.layout, vision::DetectorOptions{}) {
+      tracker_(vision_.camera, vision_.layout, vision::DetectorOptions{}) {}
+
+StatusOr<std::unique_ptr<PixelPoseMeter>> PixelPoseMeter::Make(ThesisVision vision,
+                                                               const PixelPoseOptions& options,
+                                                               std::mt19937_64& rng) {
   std::string error;
-  if (!options.IsValid(&error)) throw std::invalid_argument(error);
+  if (!options.IsValid(&error)) return Status::Error(error);
+  std::unique_ptr<PixelPoseMeter> meter(new PixelPoseMeter(std::move(vision), options));
+  const Status noise = meter->SetNoise(rng);
+  if (!noise.ok()) return noise;
+  return meter;
+}
+
+Status PixelPoseMeter::SetNoise(std::mt19937_64& rng) {
   noise_grey_ = kTrialNoiseGrey;
   for (int pass = 0; pass < 2; ++pass) {
     const double s = CentreScatter(noise_grey_, rng);
-    if (!(s > 0.0)) throw std::invalid_argument("pixel: the calibration target was not detected");
+    if (!(s > 0.0)) return Status::Error("pixel: the calibration target was not detected");
     noise_grey_ *= options_.centroid_sigma_px / s;
   }
   measured_sigma_ = CentreScatter(noise_grey_, rng);
   // Noise that breaks the detection (misplaced centres) makes the scatter jump instead:
   // then the scaling does not converge, and the scatter asked for cannot be had.
   if (!(std::abs(measured_sigma_ / options_.centroid_sigma_px - 1.0) <= kCalibrationTolerance)) {
-    throw std::invalid_argument(
-        "pixel: detected centres cannot be made to scatter by " +
-        std::to_string(options_.centroid_sigma_px) + " px with this camera and target (" +
-        std::to_string(measured_sigma_) + " px at " + std::to_string(noise_grey_) +
-        " grey levels of image noise; more breaks the detection): ask for less");
+    return Status::Error("pixel: detected centres cannot be made to scatter by " +
+                         std::to_string(options_.centroid_sigma_px) +
+                         " px with this camera and target (" + std::to_string(measured_sigma_) +
+                         " px at " + std::to_string(noise_grey_) +
+                         " grey levels of image noise; more breaks the detection): ask for less");
   }
+  return {};
 }
 
 // Scatter (px per axis) of each marker's detected centre about its own median over frames
@@ -223,13 +233,14 @@ double PixelPoseMeter::CentreScatter(double noise_grey, std::mt19937_64& rng) {
   return dof > 0 ? std::sqrt(ss / dof) : 0.0;
 }
 
-void PixelPoseMeter::BeginDay() {
-  if (options_.calibration.enabled) {
-    CalibratedDay day =
-        CalibrateDay(vision_, options_.calibration, options_.centroid_sigma_px, day_rng_);
-    calibrated_ = std::move(day.vision);
-    scale_sigma_ = day.scale_sigma;
-  }
+Status PixelPoseMeter::BeginDay() {
+  if (!options_.calibration.enabled) return {};
+  StatusOr<CalibratedDay> day =
+      CalibrateDay(vision_, options_.calibration, options_.centroid_sigma_px, day_rng_);
+  if (!day.ok()) return day.status();
+  calibrated_ = std::move(day->vision);
+  scale_sigma_ = day->scale_sigma;
+  return {};
 }
 
 bool PixelPoseMeter::Solve(const std::vector<vision::Marker>& markers, vision::PlanarPose* out) {

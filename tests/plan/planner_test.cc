@@ -553,7 +553,9 @@ void ExpectPredictedSigmaThroughPixels(PlanCase c, int trials, uint64_t seed, co
   // 0.2 mrad of heading that white-noise information cannot know: the tricycle's steering
   // scale was then 1.5x its predicted sigma; PixelPoseMeter.FinerSupersamplingShrinks...).
   po.supersample = 8;
-  PixelPoseMeter meter(v, po, rng);
+  auto made = PixelPoseMeter::Make(v, po, rng);
+  ASSERT_TRUE(made.ok()) << made.status().message();
+  PixelPoseMeter& meter = **made;
   c.o.info.pose_sigma = MeasuredPoseSigma(meter, rng);
   const auto ws = MakeCameraView(v.camera, v.floor, v.layout, v.target_height_m, 10.0);
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();

@@ -64,7 +64,9 @@ TEST(CalibrationDay, TheCalibrationsSigmaIsItsScaleError) {
   double z2 = 0.0, e2 = 0.0;
   constexpr int kDays = 16;
   for (int k = 0; k < kDays; ++k) {
-    const CalibratedDay day = CalibrateDay(truth, o, 0.1414, rng);
+    const StatusOr<CalibratedDay> calibrated = CalibrateDay(truth, o, 0.1414, rng);
+    ASSERT_TRUE(calibrated.ok()) << calibrated.status().message();
+    const CalibratedDay& day = calibrated.value();
     ASSERT_NEAR(day.vision.camera.fx / truth.camera.fx, 1.0, 0.03);
     ASSERT_GT(day.scale_sigma, 0.0);
     const FloorMapError e = CompareFloorMaps(truth, day.vision);

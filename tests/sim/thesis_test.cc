@@ -7,6 +7,16 @@
 namespace kincal {
 namespace {
 
+// The experiment, which must run: an error fails the test (and leaves an empty result).
+ThesisResult Reproduce(const ThesisOptions& o) {
+  StatusOr<ThesisResult> r = ReproduceThesis(o);
+  if (!r.ok()) {
+    ADD_FAILURE() << r.status().message();
+    return {};
+  }
+  return std::move(r).value();
+}
+
 TEST(Thesis, TablesTranscribedIntact) {
   // Spot checks against the printed tables.
   EXPECT_EQ(kThesisControls[0][0], 2.3);
@@ -21,11 +31,38 @@ TEST(Thesis, TablesTranscribedIntact) {
               kThesisNndePercent, 0.002);
 }
 
+// Options that cannot be had are an error naming them, never an exception or a run.
+TEST(Thesis, OptionsThatCannotBeHadAreAnError) {
+  ThesisOptions o;
+  o.runs = 0;
+  StatusOr<ThesisResult> r = ReproduceThesis(o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.status().message().rfind("thesis: ", 0), 0u) << r.status().message();
+  // Centres scattered by 1.9 px: noise that much breaks the detection (the meter says so).
+  o = ThesisOptions::Realistic();
+  o.runs = 1;
+  o.pixel.centroid_sigma_px = 1.9;
+  r = ReproduceThesis(o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("cannot be made to scatter by 1.900000 px"),
+            std::string::npos)
+      << r.status().message();
+  // A calibration board of 1 m squares: most of it outside the view, no day's calibration.
+  o = ThesisOptions::Realistic();
+  o.runs = 1;
+  o.pixel.calibration.board_pitch_m = 1.0;
+  r = ReproduceThesis(o);
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.status().message().find("thesis: experiment 1: the day's camera calibration: "),
+            std::string::npos)
+      << r.status().message();
+}
+
 TEST(Thesis, JointCalibrationReachesTargetAndBound) {
   ThesisOptions o;
   o.trials = 8;
   o.seed = 2003;
-  const ThesisResult r = ReproduceThesis(o);
+  const ThesisResult r = Reproduce(o);
   ASSERT_GT(r.joint_bound_nnde_percent, 0.0);
   for (const char* name : {"dd2", "ekf", "ukf", "batch"}) {
     const double v = r.joint_nnde_percent.at(name);
@@ -50,7 +87,7 @@ TEST(Thesis, EfficientJointEstimatorsMeetTheBoundTwoSided) {
   o.filters = {"dd2", "ukf"};
   o.batch = true;
   o.per_run = false;
-  const ThesisResult r = ReproduceThesis(o);
+  const ThesisResult r = Reproduce(o);
   for (const std::string name : {"dd2", "ukf", "batch"}) {
     const BoundRatio b = RatioToBound(r, name);
     std::cout << name << ": mean-square NNDE / bound = " << b.ratio << " [" << b.low << ", "
@@ -94,11 +131,11 @@ TEST(ThesisWheelErrors, ReachTheTruthNotTheEstimators) {
   o.filters = {"dd2"};
   o.batch = false;
   o.per_run = false;
-  const ThesisResult ideal = ReproduceThesis(o);
+  const ThesisResult ideal = Reproduce(o);
   o.wheel.gain_sigma = 0.003;
   o.wheel.command_step_rad_s = 0.1;
   o.stamp_step_s = 0.01;
-  const ThesisResult real = ReproduceThesis(o);
+  const ThesisResult real = Reproduce(o);
   const double ratio_ideal = ideal.joint_nnde_percent.at("dd2") / ideal.joint_bound_nnde_percent;
   const double ratio_real = real.joint_nnde_percent.at("dd2") / real.joint_bound_nnde_percent;
   std::cout << "joint DD2 NNDE: idealised " << ideal.joint_nnde_percent.at("dd2") << " % ("
@@ -124,7 +161,7 @@ TEST(ThesisTimerTick, StampsOnATickLeaveTheJointEstimateUnbiased) {
   o.filters = {"dd2"};
   o.batch = false;
   o.per_run = false;
-  const ThesisResult r = ReproduceThesis(o);
+  const ThesisResult r = Reproduce(o);
   const double nnde = r.joint_nnde_percent.at("dd2");
   std::cout << "20 ms tick: joint DD2 " << nnde << " % (bound " << r.joint_bound_nnde_percent
             << " %), NEES " << r.joint_nees.at("dd2") << ", "
@@ -169,7 +206,7 @@ TEST(ThesisRealistic, JointDd2WithNuisanceGainsReachesTargetHonestly) {
   o.seed = 18;
   o.filters = {"dd2"};
   o.batch = false;
-  const ThesisResult r = ReproduceThesis(o);
+  const ThesisResult r = Reproduce(o);
   const double dd2 = r.joint_nnde_percent.at("dd2"), gains = r.joint_nnde_percent.at("dd2+gains");
   const TableStats& s = r.per_run_stats.at("dd2");
   std::cout << "camera days " << r.camera_days << ", floor scale " << 100 * r.camera_scale_rms

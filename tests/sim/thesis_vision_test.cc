@@ -45,7 +45,9 @@ TEST(PixelPoseMeter, CentresScatterAtTheRequestedSigma) {
   std::mt19937_64 rng(3);
   PixelPoseOptions o;
   o.calibration_frames = 128;
-  const PixelPoseMeter m(ThesisTable63Vision(), o, rng);
+  auto made = PixelPoseMeter::Make(ThesisTable63Vision(), o, rng);
+  ASSERT_TRUE(made.ok()) << made.status().message();
+  const PixelPoseMeter& m = **made;
   std::cout << "image noise " << m.image_noise_grey() << " grey levels -> centres scatter "
             << m.measured_centroid_sigma_px() << " px\n";
   EXPECT_NEAR(m.measured_centroid_sigma_px(), 0.1414, 0.1414 * 0.1);
@@ -60,17 +62,18 @@ TEST(PixelPoseMeter, AScatterTheDetectionCannotGiveIsAnError) {
   std::mt19937_64 rng(12);
   PixelPoseOptions o;
   o.centroid_sigma_px = 0.1;
-  try {
-    PixelPoseMeter m(v, o, rng);
-    ADD_FAILURE() << "settled at " << m.measured_centroid_sigma_px() << " px";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot be made to scatter by 0.100000 px"),
+  const auto refused = PixelPoseMeter::Make(v, o, rng);
+  if (refused.ok()) {
+    ADD_FAILURE() << "settled at " << refused.value()->measured_centroid_sigma_px() << " px";
+  } else {
+    EXPECT_NE(refused.status().message().find("cannot be made to scatter by 0.100000 px"),
               std::string::npos)
-        << e.what();
+        << refused.status().message();
   }
   o.centroid_sigma_px = 0.05;
-  const PixelPoseMeter m(v, o, rng);
-  EXPECT_NEAR(m.measured_centroid_sigma_px(), 0.05, 0.05 * 0.15);
+  const auto made = PixelPoseMeter::Make(v, o, rng);
+  ASSERT_TRUE(made.ok()) << made.status().message();
+  EXPECT_NEAR(made.value()->measured_centroid_sigma_px(), 0.05, 0.05 * 0.15);
 }
 
 // Heading error that is a function of the pose: each of 20 poses across the simulator's
@@ -83,7 +86,12 @@ double FixedHeadingPattern(int supersample) {
   PixelPoseOptions o;
   o.centroid_sigma_px = 0.01;
   o.supersample = supersample;
-  PixelPoseMeter m(test_util::ShippedCamera(), o, rng);
+  auto made = PixelPoseMeter::Make(test_util::ShippedCamera(), o, rng);
+  if (!made.ok()) {
+    ADD_FAILURE() << made.status().message();
+    return 0.0;
+  }
+  PixelPoseMeter& m = **made;
   std::uniform_real_distribution<double> pos(-0.5, 0.5), ang(-3.0, 3.0);
   constexpr int kPoses = 20, kRenders = 12;
   double mean_sq = 0.0, var = 0.0;
@@ -122,7 +130,9 @@ TEST(PixelPoseMeter, FinerSupersamplingShrinksTheFixedPattern) {
 // NEES near 3) and no heading is off by a mirrored tilt.
 TEST(PixelPoseMeter, PosesWithinTheirCovarianceAndNoMirroredTilts) {
   std::mt19937_64 rng(5);
-  PixelPoseMeter m(ThesisTable63Vision(), PixelPoseOptions{}, rng);
+  auto made = PixelPoseMeter::Make(ThesisTable63Vision(), PixelPoseOptions{}, rng);
+  ASSERT_TRUE(made.ok()) << made.status().message();
+  PixelPoseMeter& m = **made;
   std::uniform_real_distribution<double> pos(-0.5, 0.5), ang(-std::numbers::pi, std::numbers::pi);
   int n = 0, lost = 0;
   double nees = 0.0, worst = 0.0;

@@ -28,6 +28,7 @@
 
 #include "kincal/sim/simulator.h"
 #include "kincal/sim/thesis_vision.h"
+#include "kincal/status.h"
 
 namespace kincal {
 
@@ -178,6 +179,8 @@ double Nnde(const Eigen::VectorXd& est, const Eigen::VectorXd& truth);
 // Expected (RMS) NNDE of an estimator with covariance C: sqrt(trace(W C W)), W = diag(1/a).
 double ExpectedNnde(const Eigen::MatrixXd& C, const Eigen::VectorXd& truth);
 
-ThesisResult ReproduceThesis(const ThesisOptions& options);
+// The experiment as the options describe it. An error on invalid options, or when the
+// realistic world's camera cannot be made (PixelPoseMeter::Make) or calibrated on a day.
+StatusOr<ThesisResult> ReproduceThesis(const ThesisOptions& options);
 
 }  // namespace kincal

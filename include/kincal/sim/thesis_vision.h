@@ -19,9 +19,11 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <random>
 #include <string>
 
+#include "kincal/status.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
@@ -78,18 +80,22 @@ struct PixelPoseOptions {
 
 class PixelPoseMeter {
  public:
-  // Sets the images' grey-level noise so that detected centres scatter by
+  // A meter whose images' grey-level noise makes detected centres scatter by
   // options.centroid_sigma_px: renders a still target calibration_frames times at a
   // trial noise level, measures the scatter of each marker's centre about its mean, and
-  // scales the noise (the centre is linear in it), twice. Throws std::invalid_argument
-  // on invalid options.
-  PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& options, std::mt19937_64& rng);
+  // scales the noise (the centre is linear in it), twice. An error on invalid options,
+  // when the target is not detected, or when no noise gives that scatter (more breaks the
+  // detection).
+  static StatusOr<std::unique_ptr<PixelPoseMeter>> Make(ThesisVision vision,
+                                                        const PixelPoseOptions& options,
+                                                        std::mt19937_64& rng);
 
   // A new experiment day: with options.calibration enabled, the camera and floor are
   // calibrated again (a fresh draw of the calibration's error; its own random stream,
   // from options.calibration.seed) and
-  // the poses from now on are solved with them. Otherwise nothing changes.
-  void BeginDay();
+  // the poses from now on are solved with them. Otherwise nothing changes. An error when
+  // the day's calibration fails (the poses are then solved as before).
+  Status BeginDay();
   // The calibration poses are solved with (the truth until the first BeginDay), and the
   // 1-sigma of its floor's scale as the calibration itself gives it (0: the truth).
   const ThesisVision& calibrated() const { return calibrated_; }
@@ -106,6 +112,8 @@ class PixelPoseMeter {
   const ThesisVision& vision() const { return vision_; }
 
  private:
+  PixelPoseMeter(ThesisVision vision, const PixelPoseOptions& options);
+  Status SetNoise(std::mt19937_64& rng);  // Make's noise search
   double CentreScatter(double noise_grey, std::mt19937_64& rng);
   bool Solve(const std::vector<vision::Marker>& markers, vision::PlanarPose* out);
 
