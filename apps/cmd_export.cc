@@ -1,13 +1,12 @@
 // kincal export: the calibrated parameters with their sigma (and covariance) as YAML a
 // robot's configuration can include, or as the parameters of a ros2_control controller;
 // from a kincald checkpoint, the last kincal.params_t in an LCM log, or an analyze report.
-#include <sys/stat.h>
-
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <kincal/params_t.hpp>
 #include <map>
+#include <memory>
 #include <sstream>
 
 #include "commands.h"
@@ -24,9 +23,11 @@ namespace {
 
 // The last plausible kincal.params_t on `channel`.
 Checkpoint FromLog(const std::string& path, const std::string& channel) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw std::runtime_error(path + ": cannot open");
-  LcmLogReader file(path);
+  std::unique_ptr<LcmLogReader> opened;
+  if (const Status s = LcmLogReader::Open(path, &opened); !s.ok()) {
+    throw std::runtime_error(s.message());
+  }
+  LcmLogReader& file = *opened;
   kincal::params_t last;
   bool found = false;
   int64_t bad = 0;

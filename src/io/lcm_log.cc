@@ -1,11 +1,11 @@
 // Reads controls and poses from a kincald LCM event log.
-#include <sys/stat.h>
 
 #include <algorithm>
 #include <cmath>
 #include <kincal/controls_t.hpp>
 #include <kincal/pose_t.hpp>
 #include <kincal/run_t.hpp>
+#include <memory>
 #include <optional>
 
 #include "kincal/angles.h"
@@ -139,14 +139,8 @@ Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> p
 
 Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model,
                             const std::string& controls_channel, const std::string& pose_channel) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) throw ReadError(path + ": cannot open for reading");
-  std::optional<LcmLogReader> log;
-  try {
-    log.emplace(path);
-  } catch (const std::runtime_error& e) {
-    throw ReadError(e.what());
-  }
+  std::unique_ptr<LcmLogReader> log;
+  if (const Status s = LcmLogReader::Open(path, &log); !s.ok()) throw ReadError(s.message());
   std::vector<TimedControls> controls;
   std::vector<TimedPose> poses;
   std::vector<std::pair<double, RecordingRun>> runs;

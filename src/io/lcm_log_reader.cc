@@ -4,7 +4,6 @@
 
 #include <cerrno>
 #include <cstring>
-#include <stdexcept>
 
 namespace kincal {
 namespace {
@@ -41,13 +40,6 @@ Status LcmLogReader::Open(const std::string& path, std::unique_ptr<LcmLogReader>
 
 LcmLogReader::LcmLogReader(std::string path, std::FILE* f, int64_t size)
     : path_(std::move(path)), f_(f), size_(size) {}
-
-LcmLogReader::LcmLogReader(const std::string& path) : path_(path) {
-  std::unique_ptr<LcmLogReader> opened;
-  if (const Status s = Open(path, &opened); !s.ok()) throw std::runtime_error(s.message());
-  std::swap(f_, opened->f_);
-  size_ = opened->size_;
-}
 
 LcmLogReader::~LcmLogReader() {
   if (f_ != nullptr) std::fclose(f_);

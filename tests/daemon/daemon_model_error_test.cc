@@ -82,11 +82,12 @@ Replayed SimulateAndReplayScenario(const std::string& name, const std::string& s
     EXPECT_EQ(d.Run(), 0);
     r.counters = d.counters();
     // Every replay publishes the very same parameters (bytes).
-    LcmLogReader log(replay.record.path);
+    const std::unique_ptr<LcmLogReader> log = test_util::OpenLog(replay.record.path);
+    if (!log) return r;
     LcmLogEvent ev;
     std::vector<std::vector<uint8_t>> params;
     std::vector<kincal::calibration_t> calibrations;
-    while (log.Next(&ev)) {
+    while (log->Next(&ev)) {
       if (ev.channel == replay.lcm.params_channel) params.push_back(ev.data);
       if (ev.channel == replay.lcm.calibration_channel) {
         calibrations.emplace_back().decode(ev.data.data(), 0, static_cast<int>(ev.data.size()));
@@ -106,10 +107,11 @@ Replayed SimulateAndReplayScenario(const std::string& name, const std::string& s
     }
   }
   r.log = replay.record.path;
-  LcmLogReader log(replay.record.path);
+  const std::unique_ptr<LcmLogReader> log = test_util::OpenLog(replay.record.path);
+  if (!log) return r;
   LcmLogEvent ev;
   const int n = 0;
-  while (log.Next(&ev)) {
+  while (log->Next(&ev)) {
     const int size = static_cast<int>(ev.data.size());
     if (ev.channel == replay.lcm.params_channel) {
       r.params.emplace_back().decode(ev.data.data(), n, size);

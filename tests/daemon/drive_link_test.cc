@@ -145,10 +145,11 @@ TEST(DriveConfig, DriveNeedsGuidanceTheSimulatorAndAnEstimateWhileResting) {
 
 // Data time of the first params_t whose sigmas all meet the targets (+inf: never).
 double TimeToTargets(const std::string& log_path, const DaemonConfig& c) {
-  LcmLogReader log(log_path);
+  const std::unique_ptr<LcmLogReader> log = test_util::OpenLog(log_path);
+  if (!log) return std::numeric_limits<double>::infinity();
   LcmLogEvent ev;
   int64_t first_utime = -1;
-  while (log.Next(&ev)) {
+  while (log->Next(&ev)) {
     if (ev.channel != c.lcm.params_channel) continue;
     kincal::params_t m;
     if (m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())) < 0) continue;
@@ -239,12 +240,13 @@ TEST(DriveDaemon, StatusIsHonestOnceTheEstimateIsRightAndAHiddenLagIsStillNamed)
   c.sim.duration_s = 30;
   RunDaemon(c, "honest");
   const std::map<std::string, double> truth = test_util::Truth(c);
-  LcmLogReader log(test_util::TempPath("honest.lcm"));
+  const std::unique_ptr<LcmLogReader> log = test_util::OpenLog(test_util::TempPath("honest.lcm"));
+  ASSERT_NE(log, nullptr);
   LcmLogEvent ev;
   int64_t first = -1;
   int right = 0, inadequate_while_right = 0;
   double first_bad_s = -1;
-  while (log.Next(&ev)) {
+  while (log->Next(&ev)) {
     if (ev.channel != c.lcm.params_channel) continue;
     kincal::params_t m;
     ASSERT_GE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), 0);
@@ -272,10 +274,12 @@ TEST(DriveDaemon, StatusIsHonestOnceTheEstimateIsRightAndAHiddenLagIsStillNamed)
   hidden.guidance.drive = false;
   hidden.guidance.targets.erase("tau_s");
   RunDaemon(hidden, "hidden_lag");
-  LcmLogReader hidden_log(test_util::TempPath("hidden_lag.lcm"));
+  const std::unique_ptr<LcmLogReader> hidden_log =
+      test_util::OpenLog(test_util::TempPath("hidden_lag.lcm"));
+  ASSERT_NE(hidden_log, nullptr);
   double named_s = -1;
   first = -1;
-  while (hidden_log.Next(&ev) && named_s < 0) {
+  while (hidden_log->Next(&ev) && named_s < 0) {
     if (ev.channel != c.lcm.model_check_channel) continue;
     kincal::model_check_t m;
     ASSERT_GE(m.decode(ev.data.data(), 0, static_cast<int>(ev.data.size())), 0);

@@ -17,11 +17,21 @@ using testing::ReadAll;
 using testing::ThreeEventLog;
 class LcmLogReaderTest : public testing::IoTest {};
 
+// A log the test wrote, opened; none (and the test failed) when it cannot be.
+std::unique_ptr<LcmLogReader> Opened(const std::string& path) {
+  std::unique_ptr<LcmLogReader> r;
+  const Status s = LcmLogReader::Open(path, &r);
+  if (!s.ok()) ADD_FAILURE() << s.message();
+  return r;
+}
+
 TEST_F(LcmLogReaderTest, ReadsWhatLiblcmWrites) {
   std::vector<int64_t> off;
   const std::string bytes = ThreeEventLog(dir_, &off);
   ASSERT_EQ(bytes.size(), static_cast<size_t>(off[2] + 28 + 3 + 102));
-  LcmLogReader r((dir_ / "three.lcm").string());
+  const auto opened = Opened((dir_ / "three.lcm").string());
+  ASSERT_NE(opened, nullptr);
+  LcmLogReader& r = *opened;
   const auto ev = ReadAll(r);
   ASSERT_EQ(ev.size(), 3u);
   for (int k = 0; k < 3; ++k) {
@@ -36,7 +46,15 @@ TEST_F(LcmLogReaderTest, ReadsWhatLiblcmWrites) {
   EXPECT_TRUE(r.problems().empty());
   r.Rewind();
   EXPECT_EQ(ReadAll(r).size(), 3u);
-  EXPECT_THROW(LcmLogReader((dir_ / "none.lcm").string()), std::runtime_error);
+  // What cannot be read is named, with why (errno's text), and nothing is opened.
+  std::unique_ptr<LcmLogReader> none;
+  const std::string missing = (dir_ / "none.lcm").string();
+  Status s = LcmLogReader::Open(missing, &none);
+  EXPECT_EQ(s.message(), missing + ": cannot open the LCM log: No such file or directory");
+  EXPECT_EQ(none, nullptr);
+  s = LcmLogReader::Open(dir_.string(), &none);
+  EXPECT_EQ(s.message(), dir_.string() + ": is a directory, expected an LCM log file");
+  EXPECT_EQ(none, nullptr);
 }
 
 TEST_F(LcmLogReaderTest, NamesACutShortLastEvent) {
@@ -44,7 +62,9 @@ TEST_F(LcmLogReaderTest, NamesACutShortLastEvent) {
   const std::string bytes = ThreeEventLog(dir_, &off);
   for (const size_t cut : {static_cast<size_t>(off[2] + 10), static_cast<size_t>(off[2] + 40)}) {
     const std::string p = Write("cut.lcm", bytes.substr(0, cut));
-    LcmLogReader r(p);
+    const auto opened = Opened(p);
+    ASSERT_NE(opened, nullptr);
+    LcmLogReader& r = *opened;
     EXPECT_EQ(ReadAll(r).size(), 2u) << cut;
     EXPECT_TRUE(r.truncated());
     ASSERT_EQ(r.problems().size(), 1u);
@@ -60,7 +80,9 @@ TEST_F(LcmLogReaderTest, SkipsDamageAndSaysWhere) {
   {  // A data length of 2^31 - 1 in the middle event: no allocation, skip to the third.
     std::string b = bytes;
     for (int i = 0; i < 4; ++i) b[static_cast<size_t>(off[1] + 24 + i)] = i == 0 ? '\x7f' : '\xff';
-    LcmLogReader r(Write("huge.lcm", b));
+    const auto opened = Opened(Write("huge.lcm", b));
+    ASSERT_NE(opened, nullptr);
+    LcmLogReader& r = *opened;
     const auto ev = ReadAll(r);
     ASSERT_EQ(ev.size(), 2u);
     EXPECT_EQ(ev[0].channel, "CH0");
@@ -75,7 +97,9 @@ TEST_F(LcmLogReaderTest, SkipsDamageAndSaysWhere) {
   {  // Seven junk bytes between the first and second events.
     std::string b = bytes;
     b.insert(static_cast<size_t>(off[1]), "garbage");
-    LcmLogReader r(Write("junk.lcm", b));
+    const auto opened = Opened(Write("junk.lcm", b));
+    ASSERT_NE(opened, nullptr);
+    LcmLogReader& r = *opened;
     EXPECT_EQ(ReadAll(r).size(), 3u);
     EXPECT_EQ(r.damaged_bytes(), 7);
     EXPECT_EQ(r.damaged_stretches(), 1);

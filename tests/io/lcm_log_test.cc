@@ -46,7 +46,11 @@ TEST_F(LcmLog, ReadsBack) {
   EXPECT_EQ(r.controls.At(0.45)[0], 0.5);           // v, mapped by name
   EXPECT_NEAR(r.controls.At(0.45)[1], 0.4, 1e-12);  // omega
   EXPECT_NEAR(r.poses[2].z.x(), 0.1, 1e-12);
-  EXPECT_FALSE(ReadLcmLog((dir_ / "none.lcm").string(), *MakeModel("unicycle").value()).ok());
+  const std::string missing = (dir_ / "none.lcm").string();
+  const auto none = ReadLcmLog(missing, *MakeModel("unicycle").value());
+  ASSERT_FALSE(none.ok());
+  EXPECT_EQ(none.status().message(),
+            missing + ": cannot open the LCM log: No such file or directory");
 }
 
 TEST_F(LcmLog, DamagedIsReadWithWarnings) {

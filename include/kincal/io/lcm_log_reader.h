@@ -35,8 +35,6 @@ class LcmLogReader {
   // Opens a log: an error names the file and why (errno's text; a directory or anything
   // but a regular file is not a log).
   static Status Open(const std::string& path, std::unique_ptr<LcmLogReader>* out);
-  // Throwing form of Open (std::runtime_error with the same message).
-  explicit LcmLogReader(const std::string& path);
   ~LcmLogReader();
   LcmLogReader(const LcmLogReader&) = delete;
   LcmLogReader& operator=(const LcmLogReader&) = delete;
