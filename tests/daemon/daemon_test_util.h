@@ -9,13 +9,12 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <memory>
 #include <string>
 
 #include "daemon/frame_source.h"
+#include "io/io_test_util.h"
 #include "kincal/daemon/config.h"
 #include "kincal/io/checkpoint.h"
-#include "kincal/io/lcm_log_reader.h"
 #include "kincal/sim/scenario.h"
 #include "source_dir.h"
 #include "temp_path.h"
@@ -24,15 +23,8 @@ namespace kincal::daemon::test_util {
 
 inline const std::string kConfigDir = ::kincal::testing::SourceDir() + "/config";
 
+using ::kincal::testing::OpenLog;
 using ::kincal::testing::TempPath;
-
-// A log the test wrote, opened at its start; none (and the test failed) when it cannot be.
-inline std::unique_ptr<LcmLogReader> OpenLog(const std::string& path) {
-  std::unique_ptr<LcmLogReader> log;
-  const Status opened = LcmLogReader::Open(path, &log);
-  if (!opened.ok()) ADD_FAILURE() << opened.message();
-  return log;
-}
 
 // The shipped simulated robot, on memq://, as fast as possible (lossless).
 inline DaemonConfig SimConfig(double duration_s) {

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,14 @@ inline std::string ThreeEventLog(const std::filesystem::path& dir, std::vector<i
   *offsets = {0, 28 + 3 + 100, 2 * (28 + 3) + 100 + 101};
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A log the test wrote, opened at its start; none (and the test failed) when it cannot be.
+inline std::unique_ptr<LcmLogReader> OpenLog(const std::string& path) {
+  std::unique_ptr<LcmLogReader> log;
+  const Status opened = LcmLogReader::Open(path, &log);
+  if (!opened.ok()) ADD_FAILURE() << opened.message();
+  return log;
 }
 
 inline std::vector<LcmLogEvent> ReadAll(LcmLogReader& r) {

@@ -13,23 +13,16 @@
 namespace kincal {
 namespace {
 
+using testing::OpenLog;
 using testing::ReadAll;
 using testing::ThreeEventLog;
 class LcmLogReaderTest : public testing::IoTest {};
-
-// A log the test wrote, opened; none (and the test failed) when it cannot be.
-std::unique_ptr<LcmLogReader> Opened(const std::string& path) {
-  std::unique_ptr<LcmLogReader> r;
-  const Status s = LcmLogReader::Open(path, &r);
-  if (!s.ok()) ADD_FAILURE() << s.message();
-  return r;
-}
 
 TEST_F(LcmLogReaderTest, ReadsWhatLiblcmWrites) {
   std::vector<int64_t> off;
   const std::string bytes = ThreeEventLog(dir_, &off);
   ASSERT_EQ(bytes.size(), static_cast<size_t>(off[2] + 28 + 3 + 102));
-  const auto opened = Opened((dir_ / "three.lcm").string());
+  const auto opened = OpenLog((dir_ / "three.lcm").string());
   ASSERT_NE(opened, nullptr);
   LcmLogReader& r = *opened;
   const auto ev = ReadAll(r);
@@ -62,7 +55,7 @@ TEST_F(LcmLogReaderTest, NamesACutShortLastEvent) {
   const std::string bytes = ThreeEventLog(dir_, &off);
   for (const size_t cut : {static_cast<size_t>(off[2] + 10), static_cast<size_t>(off[2] + 40)}) {
     const std::string p = Write("cut.lcm", bytes.substr(0, cut));
-    const auto opened = Opened(p);
+    const auto opened = OpenLog(p);
     ASSERT_NE(opened, nullptr);
     LcmLogReader& r = *opened;
     EXPECT_EQ(ReadAll(r).size(), 2u) << cut;
@@ -80,7 +73,7 @@ TEST_F(LcmLogReaderTest, SkipsDamageAndSaysWhere) {
   {  // A data length of 2^31 - 1 in the middle event: no allocation, skip to the third.
     std::string b = bytes;
     for (int i = 0; i < 4; ++i) b[static_cast<size_t>(off[1] + 24 + i)] = i == 0 ? '\x7f' : '\xff';
-    const auto opened = Opened(Write("huge.lcm", b));
+    const auto opened = OpenLog(Write("huge.lcm", b));
     ASSERT_NE(opened, nullptr);
     LcmLogReader& r = *opened;
     const auto ev = ReadAll(r);
@@ -97,7 +90,7 @@ TEST_F(LcmLogReaderTest, SkipsDamageAndSaysWhere) {
   {  // Seven junk bytes between the first and second events.
     std::string b = bytes;
     b.insert(static_cast<size_t>(off[1]), "garbage");
-    const auto opened = Opened(Write("junk.lcm", b));
+    const auto opened = OpenLog(Write("junk.lcm", b));
     ASSERT_NE(opened, nullptr);
     LcmLogReader& r = *opened;
     EXPECT_EQ(ReadAll(r).size(), 3u);
