@@ -10,6 +10,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "kincal/text.h"
+
 namespace kincal::daemon {
 namespace {
 
@@ -403,11 +405,11 @@ void LoadSections(const YAML::Node& root, const std::string& path,
 }
 
 DaemonConfig LoadDaemonConfig(const std::string& path) {
+  const StatusOr<std::string> text = ReadTextFile(path, "config file");
+  if (!text.ok()) throw ConfigError(text.status().message());
   YAML::Node root;
   try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw ConfigError(path + ": cannot open config file");
+    root = YAML::Load(text.value());
   } catch (const YAML::Exception& e) {
     throw ConfigError(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
   }

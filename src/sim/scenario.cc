@@ -6,6 +6,8 @@
 #include <set>
 #include <stdexcept>
 
+#include "kincal/text.h"
+
 namespace kincal {
 
 namespace {
@@ -29,9 +31,11 @@ T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std:
 }
 
 Scenario LoadScenarioOrThrow(const std::string& file) {
+  const StatusOr<std::string> text = ReadTextFile(file, "scenario");
+  if (!text.ok()) throw ScenarioError(text.status().message());
   YAML::Node root;
   try {
-    root = YAML::LoadFile(file);
+    root = YAML::Load(text.value());
   } catch (const YAML::Exception& e) {
     throw ScenarioError(file + ": " + e.what());
   }

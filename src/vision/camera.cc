@@ -74,9 +74,11 @@ namespace {
 // ROS camera_info YAML (camera_calibration_parsers' keys), through yaml-cpp: it carries no
 // %YAML directive, without which OpenCV's reader refuses a file.
 CameraModel ReadRosCameraInfo(const std::string& path) {
+  const StatusOr<std::string> text = ReadTextFile(path, "camera intrinsics");
+  if (!text.ok()) throw CameraFileError(text.status().message());
   YAML::Node n;
   try {
-    n = YAML::LoadFile(path);
+    n = YAML::Load(text.value());
   } catch (const YAML::Exception& e) {
     throw CameraFileError(path + ": not YAML (" + e.what() + ")");
   }

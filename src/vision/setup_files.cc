@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <stdexcept>
 
+#include "kincal/text.h"
 #include "vision/opencv_file.h"
 
 namespace kincal::vision {
@@ -25,9 +26,11 @@ namespace {
 
 TargetLayout ReadTargetLayoutYamlOrThrow(const std::string& path) {
   if (path.empty()) return TargetLayout::Thesis();
+  const StatusOr<std::string> text = ReadTextFile(path, "target layout");
+  if (!text.ok()) throw SetupFileError(text.status().message());
   YAML::Node n;
   try {
-    n = YAML::LoadFile(path);
+    n = YAML::Load(text.value());
   } catch (const YAML::Exception& e) {
     throw SetupFileError(path + ": " + e.what());
   }
