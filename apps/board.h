@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
+
 namespace kincal::app {
 
 struct Board {
@@ -15,17 +17,22 @@ struct Board {
   int cols = 0, rows = 0;
   double pitch = 0;
 
-  static Board Parse(const std::string& s) {
+  static StatusOr<Board> Parse(const std::string& s) {
     static const std::regex re(R"((chessboard|circles|acircles):(\d+)x(\d+):([0-9.eE+-]+))");
     std::smatch m;
     if (!std::regex_match(s, m, re)) {
-      throw std::runtime_error("--board '" + s +
-                               "': expected KIND:COLSxROWS:PITCH with KIND chessboard, circles or "
-                               "acircles, e.g. chessboard:9x6:0.025");
+      return Status::Error("--board '" + s +
+                           "': expected KIND:COLSxROWS:PITCH with KIND chessboard, circles or "
+                           "acircles, e.g. chessboard:9x6:0.025");
     }
-    Board b{m[1], std::stoi(m[2]), std::stoi(m[3]), std::stod(m[4])};
+    Board b;
+    try {
+      b = Board{m[1], std::stoi(m[2]), std::stoi(m[3]), std::stod(m[4])};
+    } catch (const std::logic_error&) {  // out of range, or a pitch such as "+"
+      return Status::Error("--board '" + s + "': a number out of range");
+    }
     if (b.cols < 2 || b.rows < 2 || !(b.pitch > 0)) {
-      throw std::runtime_error("--board '" + s + "': need >= 2x2 points and pitch > 0");
+      return Status::Error("--board '" + s + "': need >= 2x2 points and pitch > 0");
     }
     return b;
   }

@@ -19,7 +19,7 @@ namespace kincal::app {
 namespace {
 
 // "pos_m,heading_rad": two finite numbers > 0.
-Eigen::Vector2d ParsePoseSigma(const std::string& text) {
+StatusOr<Eigen::Vector2d> ParsePoseSigma(const std::string& text) {
   Eigen::Vector2d v(0, 0);
   const size_t comma = text.find(',');
   for (int i = 0; i < 2 && comma != std::string::npos; ++i) {
@@ -29,8 +29,8 @@ Eigen::Vector2d ParsePoseSigma(const std::string& text) {
     if (ec != std::errc() || stop != end || !std::isfinite(v[i])) v[i] = 0;
   }
   if (!(v[0] > 0) || !(v[1] > 0)) {
-    throw std::runtime_error("--pose-sigma '" + text +
-                             "': expected 'pos_m,heading_rad', two numbers > 0");
+    return Status::Error("--pose-sigma '" + text +
+                         "': expected 'pos_m,heading_rad', two numbers > 0");
   }
   return v;
 }
@@ -60,34 +60,26 @@ struct AnalyzeArgs {
   AnalyzeOptions opt;
 };
 
-// The options the command line asks for (throws naming the option at fault).
-AnalyzeOptions OptionsFrom(AnalyzeArgs* a) {
+// The options the command line asks for (an error names the option at fault).
+StatusOr<AnalyzeOptions> OptionsFrom(AnalyzeArgs* a) {
   AnalyzeOptions o = a->opt;
   if (!a->mrclam.empty()) {
     if (a->model.empty()) a->model = "unicycle";
-    if (a->robot < 1) throw std::runtime_error("--mrclam needs --robot N (1..5 in dataset 6)");
+    if (a->robot < 1) return Status::Error("--mrclam needs --robot N (1..5 in dataset 6)");
   }
-  if (a->model.empty()) throw std::runtime_error("--model is required (see `kincal models`)");
+  if (a->model.empty()) return Status::Error("--model is required (see `kincal models`)");
   o.model = a->model;
-  if (const Status s = ParseInitList(a->init, &o.init); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
-  if (const Status s = ParseInitList(a->fix, &o.fixed, "--fix"); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
-  if (const Status s = ParseRunList(a->heldout_runs, &o.heldout_runs); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
+  KINCAL_RETURN_IF_ERROR(ParseInitList(a->init, &o.init));
+  KINCAL_RETURN_IF_ERROR(ParseInitList(a->fix, &o.fixed, "--fix"));
+  KINCAL_RETURN_IF_ERROR(ParseRunList(a->heldout_runs, &o.heldout_runs));
   if (a->effects == "auto" || a->effects == "none") {
     o.effects_mode = a->effects;
   } else {
     o.effects_mode = "list";
-    if (const Status s = ParseEffectList(a->effects, &o.effects); !s.ok()) {
-      throw std::runtime_error(s.message());
-    }
+    KINCAL_RETURN_IF_ERROR(ParseEffectList(a->effects, &o.effects));
   }
   if (!a->pose_sigma.empty()) {
-    o.pose_sigma = ParsePoseSigma(a->pose_sigma);
+    KINCAL_ASSIGN_OR_RETURN(o.pose_sigma, ParsePoseSigma(a->pose_sigma));
   }
   return o;
 }
@@ -255,20 +247,11 @@ Command AddAnalyze(CLI::App& app) {
                  "threads: candidate effects are fitted in parallel (default: every core; the "
                  "result does not depend on it)")
       ->capture_default_str();
-  return [a]() -> int {
-    AnalyzeOptions o = OptionsFrom(a.get());
-    const StatusOr<Recording> rec = ReadInput(*a, o);
-    if (!rec.ok()) {
-      std::cerr << "kincal: error: " << rec.status().message() << "\n";
-      return 1;
-    }
+  return [a]() -> StatusOr<int> {
+    KINCAL_ASSIGN_OR_RETURN(AnalyzeOptions o, OptionsFrom(a.get()));
+    KINCAL_ASSIGN_OR_RETURN(const Recording rec, ReadInput(*a, o));
     o.progress = Progress();
-    const StatusOr<AnalyzeResult> result = Analyze(rec.value(), o);
-    if (!result.ok()) {
-      std::cerr << "kincal: error: " << result.status().message() << "\n";
-      return 1;
-    }
-    const AnalyzeResult& r = result.value();
+    KINCAL_ASSIGN_OR_RETURN(const AnalyzeResult r, Analyze(rec, o));
     if (const Status written = WriteAnalysisReport(r, a->out); !written.ok()) {
       std::cerr << "kincal analyze: the report was not written: " << written.message() << "\n";
       return 1;

@@ -22,11 +22,9 @@ namespace kincal::app {
 namespace {
 
 // The last plausible kincal.params_t on `channel`.
-Checkpoint FromLog(const std::string& path, const std::string& channel) {
+StatusOr<Checkpoint> FromLog(const std::string& path, const std::string& channel) {
   std::unique_ptr<LcmLogReader> opened;
-  if (const Status s = LcmLogReader::Open(path, &opened); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
+  KINCAL_RETURN_IF_ERROR(LcmLogReader::Open(path, &opened));
   LcmLogReader& file = *opened;
   kincal::params_t last;
   bool found = false;
@@ -45,7 +43,7 @@ Checkpoint FromLog(const std::string& path, const std::string& channel) {
     last = std::move(m);
     found = true;
   }
-  if (!found) throw std::runtime_error(path + ": no kincal.params_t on channel " + channel);
+  if (!found) return Status::Error(path + ": no kincal.params_t on channel " + channel);
   if (bad > 0) {
     std::cerr << "kincal export: " << bad << " undecodable events on " << channel << " skipped\n";
   }
@@ -56,7 +54,7 @@ Checkpoint FromLog(const std::string& path, const std::string& channel) {
 }
 
 // "k=v,k=v" into numbers; an error names the item.
-std::map<std::string, double> ParseNominal(const std::string& text) {
+StatusOr<std::map<std::string, double>> ParseNominal(const std::string& text) {
   std::map<std::string, double> out;
   std::stringstream in(text);
   std::string item;
@@ -65,7 +63,7 @@ std::map<std::string, double> ParseNominal(const std::string& text) {
     char* end = nullptr;
     const double v = eq == std::string::npos ? 0.0 : std::strtod(item.c_str() + eq + 1, &end);
     if (eq == std::string::npos || end == item.c_str() + eq + 1 || *end != '\0') {
-      throw std::runtime_error("--nominal: '" + item + "': expected name=number");
+      return Status::Error("--nominal: '" + item + "': expected name=number");
     }
     out[item.substr(0, eq)] = v;
   }
@@ -74,15 +72,9 @@ std::map<std::string, double> ParseNominal(const std::string& text) {
 
 }  // namespace
 
-Checkpoint ReadCheckpointOrThrow(const std::string& path) {
-  StatusOr<Checkpoint> c = ReadCheckpoint(path);
-  if (!c.ok()) throw std::runtime_error(c.status().message());
-  return std::move(c).value();
-}
-
-Checkpoint ReadReportAsCheckpoint(const std::string& path) {
+StatusOr<Checkpoint> ReadReportAsCheckpoint(const std::string& path) {
   ReportEstimate r;
-  if (Status s = ReadReportEstimate(path, &r); !s.ok()) throw std::runtime_error(s.message());
+  KINCAL_RETURN_IF_ERROR(ReadReportEstimate(path, &r));
   Checkpoint c;
   c.model = r.model;
   c.effects = r.effects;
@@ -101,22 +93,66 @@ Checkpoint ReadReportAsCheckpoint(const std::string& path) {
 namespace {
 
 // --format mcap: scripts/kincal_mcap.py (foxglove-sdk, from PyPI) in this process's place.
-[[noreturn]] void ExportMcap(const std::string& log, const std::string& out) {
+Status ExportMcap(const std::string& log, const std::string& out) {
   if (log.empty() || out.empty()) {
-    throw std::runtime_error("--format mcap needs --log FILE (a kincald recording) and --out FILE");
+    return Status::Error("--format mcap needs --log FILE (a kincald recording) and --out FILE");
   }
-  ExecPythonScript("kincal_mcap.py", "KINCAL_MCAP_SCRIPT", {"--log", log, "--out", out},
-                   "foxglove-sdk and lcm");
+  return ExecPythonScript("kincal_mcap.py", "KINCAL_MCAP_SCRIPT", {"--log", log, "--out", out},
+                          "foxglove-sdk and lcm");
+}
+
+struct ExportArgs {
+  std::string checkpoint, log, report, channel = "KINCAL_PARAMS", out, format = "yaml";
+  std::string nominal, controller;
+};
+
+// The parameters from the checkpoint, the log or the report the command line names, and
+// where they came from.
+StatusOr<Checkpoint> ReadSource(const ExportArgs& a, std::string* source) {
+  if (!a.checkpoint.empty()) {
+    *source = a.checkpoint;
+    return ReadCheckpoint(a.checkpoint);
+  }
+  if (!a.log.empty()) {
+    *source = a.log + " (" + a.channel + ")";
+    return FromLog(a.log, a.channel);
+  }
+  if (!a.report.empty()) {
+    *source = a.report;
+    return ReadReportAsCheckpoint(a.report);
+  }
+  return Status::Error("give --checkpoint FILE, --log FILE or --report FILE");
+}
+
+StatusOr<int> RunExport(const ExportArgs& a) {
+  if (a.format == "mcap") return ExportMcap(a.log, a.out);
+  std::string source;
+  KINCAL_ASSIGN_OR_RETURN(const Checkpoint c, ReadSource(a, &source));
+  std::ostringstream out;
+  if (a.format == "ros2_control") {
+    Ros2ControlOptions o;
+    o.controller = a.controller;
+    KINCAL_ASSIGN_OR_RETURN(o.nominal, ParseNominal(a.nominal));
+    KINCAL_RETURN_IF_ERROR(WriteRos2ControlYaml(out, c, source, o));
+  } else if (a.format == "vesc") {
+    KINCAL_ASSIGN_OR_RETURN(const auto nominal, ParseNominal(a.nominal));
+    KINCAL_RETURN_IF_ERROR(WriteVescYaml(out, c, source, nominal));
+  } else {
+    WriteExportYaml(out, c, source);
+  }
+  if (a.out.empty()) {
+    std::cout << out.str();
+  } else {
+    KINCAL_RETURN_IF_ERROR(WriteOutput(a.out, out.str(), "export"));
+    std::cout << "wrote " << a.out << "\n";
+  }
+  return 0;
 }
 
 }  // namespace
 
 Command AddExport(CLI::App& app) {
-  struct Args {
-    std::string checkpoint, log, report, channel = "KINCAL_PARAMS", out, format = "yaml";
-    std::string nominal, controller;
-  };
-  auto a = std::make_shared<Args>();
+  auto a = std::make_shared<ExportArgs>();
   auto* ck = app.add_option("--checkpoint", a->checkpoint, "kincald checkpoint (JSON)");
   auto* log = app.add_option("--log", a->log, "LCM log: its last kincal.params_t on --channel");
   auto* rep = app.add_option("--report", a->report, "kincal analyze's report.json");
@@ -135,45 +171,7 @@ Command AddExport(CLI::App& app) {
   app.add_option("--controller", a->controller,
                  "ros2_control: the controller's name (default: its type's)");
   app.add_option("--out", a->out, "YAML file (default: standard output)");
-  return [a]() -> int {
-    if (a->format == "mcap") ExportMcap(a->log, a->out);
-    Checkpoint c;
-    std::string source;
-    if (!a->checkpoint.empty()) {
-      c = ReadCheckpointOrThrow(a->checkpoint);
-      source = a->checkpoint;
-    } else if (!a->log.empty()) {
-      c = FromLog(a->log, a->channel);
-      source = a->log + " (" + a->channel + ")";
-    } else if (!a->report.empty()) {
-      c = ReadReportAsCheckpoint(a->report);
-      source = a->report;
-    } else {
-      throw std::runtime_error("give --checkpoint FILE, --log FILE or --report FILE");
-    }
-    std::ostringstream out;
-    if (a->format == "ros2_control") {
-      Ros2ControlOptions o;
-      o.controller = a->controller;
-      o.nominal = ParseNominal(a->nominal);
-      if (Status s = WriteRos2ControlYaml(out, c, source, o); !s.ok()) {
-        throw std::runtime_error(s.message());
-      }
-    } else if (a->format == "vesc") {
-      if (Status s = WriteVescYaml(out, c, source, ParseNominal(a->nominal)); !s.ok()) {
-        throw std::runtime_error(s.message());
-      }
-    } else {
-      WriteExportYaml(out, c, source);
-    }
-    if (a->out.empty()) {
-      std::cout << out.str();
-    } else {
-      WriteOutput(a->out, out.str(), "export");
-      std::cout << "wrote " << a->out << "\n";
-    }
-    return 0;
-  };
+  return [a]() -> StatusOr<int> { return RunExport(*a); };
 }
 
 }  // namespace kincal::app

@@ -15,9 +15,9 @@ Command AddImport(CLI::App& app) {
   app.footer(
       "Runs scripts/kincal_import.py with the venv's Python; `kincal import --help` lists "
       "its options.");
-  return [&app]() -> int {
-    ExecPythonScript("kincal_import.py", "KINCAL_IMPORT_SCRIPT", app.remaining(),
-                     "rosbags and lcm");
+  return [&app]() -> StatusOr<int> {
+    return ExecPythonScript("kincal_import.py", "KINCAL_IMPORT_SCRIPT", app.remaining(),
+                            "rosbags and lcm");
   };
 }
 

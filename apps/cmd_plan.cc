@@ -31,7 +31,7 @@ struct PlanArgs {
   std::string channel = "KINCAL_CONTROLS";
 };
 
-std::vector<double> ParseNumbers(const std::string& text, size_t n, const char* what) {
+StatusOr<std::vector<double>> ParseNumbers(const std::string& text, size_t n, const char* what) {
   std::vector<double> v;
   std::stringstream in(text);
   std::string item;
@@ -39,44 +39,46 @@ std::vector<double> ParseNumbers(const std::string& text, size_t n, const char* 
     char* end = nullptr;
     const double x = std::strtod(item.c_str(), &end);
     if (item.empty() || *end != '\0' || !std::isfinite(x)) {
-      throw std::runtime_error(std::string(what) + ": '" + item + "' is not a number");
+      return Status::Error(std::string(what) + ": '" + item + "' is not a number");
     }
     v.push_back(x);
   }
   if (v.size() != n) {
-    throw std::runtime_error(std::string(what) + ": " + std::to_string(n) +
-                             " comma-separated numbers expected, got '" + text + "'");
+    return Status::Error(std::string(what) + ": " + std::to_string(n) +
+                         " comma-separated numbers expected, got '" + text + "'");
   }
   return v;
 }
 
-std::map<std::string, double> ParseMap(const std::string& text, const char* what) {
+StatusOr<std::map<std::string, double>> ParseMap(const std::string& text, const char* what) {
   std::map<std::string, double> m;
   if (const Status s = ParseInitList(text, &m); !s.ok()) {
-    throw std::runtime_error(std::string(what) + ": " + s.message());
+    return Status::Error(std::string(what) + ": " + s.message());
   }
   return m;
 }
 
 // The design point and prior: --init values over the model's defaults (prior: the
 // defaults' sigma), or a checkpoint's or report's estimate and covariance.
-void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen::MatrixXd* c) {
+Status DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen::MatrixXd* c) {
   const int n = sys.num_params();
-  *p = OrThrow(ParamsFrom(sys, ParseMap(a.init, "--init"), "--init"));
+  KINCAL_ASSIGN_OR_RETURN(const auto init, ParseMap(a.init, "--init"));
+  KINCAL_ASSIGN_OR_RETURN(*p, ParamsFrom(sys, init, "--init"));
   *c = Eigen::MatrixXd::Zero(n, n);
   for (int i = 0; i < n; ++i)
     c->diagonal()[i] = std::pow(sys.params()[static_cast<size_t>(i)].default_sigma, 2);
-  if (a.checkpoint.empty() && a.report.empty()) return;
+  if (a.checkpoint.empty() && a.report.empty()) return Status();
   const std::string& source = a.checkpoint.empty() ? a.report : a.checkpoint;
-  const Checkpoint ck =
-      a.checkpoint.empty() ? ReadReportAsCheckpoint(a.report) : ReadCheckpointOrThrow(a.checkpoint);
+  KINCAL_ASSIGN_OR_RETURN(const Checkpoint ck, a.checkpoint.empty()
+                                                   ? ReadReportAsCheckpoint(a.report)
+                                                   : ReadCheckpoint(a.checkpoint));
   const std::vector<std::string>& names = ck.names;
   std::vector<int> at(names.size(), -1);
   for (size_t k = 0; k < names.size(); ++k) {
     at[k] = sys.ParamIndex(names[k]);
     if (at[k] < 0) {
-      throw std::runtime_error(source + ": parameter '" + names[k] + "' is not one of the " +
-                               std::string(sys.model().name()) + " system's");
+      return Status::Error(source + ": parameter '" + names[k] + "' is not one of the " +
+                           std::string(sys.model().name()) + " system's");
     }
     (*p)[at[k]] = ck.values[k];
   }
@@ -84,37 +86,40 @@ void DesignPoint(const System& sys, const PlanArgs& a, Eigen::VectorXd* p, Eigen
     for (size_t l = 0; l < names.size(); ++l)
       (*c)(at[k], at[l]) = ck.covariance(static_cast<int>(k), static_cast<int>(l));
   }
+  return Status();
 }
 
-std::unique_ptr<Workspace> WorkspaceFrom(const PlanArgs& a) {
+StatusOr<std::unique_ptr<Workspace>> WorkspaceFrom(const PlanArgs& a) {
   if (!a.arena.empty()) {
-    const auto v = ParseNumbers(a.arena, 4, "--arena X0,Y0,X1,Y1");
+    KINCAL_ASSIGN_OR_RETURN(const auto v, ParseNumbers(a.arena, 4, "--arena X0,Y0,X1,Y1"));
     if (!(v[0] < v[2] && v[1] < v[3]))
-      throw std::runtime_error("--arena: X0 < X1 and Y0 < Y1 expected");
+      return Status::Error("--arena: X0 < X1 and Y0 < Y1 expected");
     return MakeArena(v[0], v[1], v[2], v[3]);
   }
   if (a.camera.empty() || a.floor.empty()) {
-    throw std::runtime_error("a workspace is needed: --arena X0,Y0,X1,Y1, or --camera and --floor");
+    return Status::Error("a workspace is needed: --arena X0,Y0,X1,Y1, or --camera and --floor");
   }
-  return MakeCameraView(
-      OrThrow(vision::ReadCameraYaml(a.camera)), OrThrow(vision::ReadFloorYaml(a.floor)),
-      OrThrow(vision::ReadTargetLayoutYaml(a.target)), a.target_height_m, a.margin_px);
+  KINCAL_ASSIGN_OR_RETURN(const auto camera, vision::ReadCameraYaml(a.camera));
+  KINCAL_ASSIGN_OR_RETURN(const auto floor, vision::ReadFloorYaml(a.floor));
+  KINCAL_ASSIGN_OR_RETURN(const auto target, vision::ReadTargetLayoutYaml(a.target));
+  return MakeCameraView(camera, floor, target, a.target_height_m, a.margin_px);
 }
 
-PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
+StatusOr<PlanOptions> OptionsFrom(const System& sys, const PlanArgs& a) {
   PlanOptions o;
   o.duration_s = a.duration_s;
   o.control_rate_hz = a.rate_hz;
   o.segment_s = a.segment_s;
   o.info.pose_rate_hz = a.pose_rate_hz;
   if (!a.pose_sigma.empty()) {
-    const auto s = ParseNumbers(a.pose_sigma, 3, "--pose-sigma SX,SY,STHETA");
+    KINCAL_ASSIGN_OR_RETURN(const auto s,
+                            ParseNumbers(a.pose_sigma, 3, "--pose-sigma SX,SY,STHETA"));
     o.info.pose_sigma = Eigen::Vector3d(s[0], s[1], s[2]);
   }
-  if (const Status s =
-          PlanLimitsFrom(sys, ParseMap(a.limits, "--limits"), ParseMap(a.targets, "--targets"), &o);
-      !s.ok()) {
-    throw std::runtime_error("--" + s.message());
+  KINCAL_ASSIGN_OR_RETURN(const auto limits, ParseMap(a.limits, "--limits"));
+  KINCAL_ASSIGN_OR_RETURN(const auto targets, ParseMap(a.targets, "--targets"));
+  if (const Status s = PlanLimitsFrom(sys, limits, targets, &o); !s.ok()) {
+    return Status::Error("--" + s.message());
   }
   if (a.criterion == "a") {
     o.criterion = DesignCriterion::kA;
@@ -123,20 +128,18 @@ PlanOptions OptionsFrom(const System& sys, const PlanArgs& a) {
   } else if (a.criterion == "targets") {
     o.criterion = DesignCriterion::kTargets;
   } else {
-    throw std::runtime_error("--criterion: a, d or targets expected, not '" + a.criterion + "'");
+    return Status::Error("--criterion: a, d or targets expected, not '" + a.criterion + "'");
   }
   std::string error;
-  if (!o.IsValid(sys, &error)) throw std::runtime_error(error);
+  if (!o.IsValid(sys, &error)) return Status::Error(error);
   return o;
 }
 
 // --advise: what to drive next from the estimate, and the time to the targets.
-int RunAdvice(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd& cov,
-              const PlanOptions& o, const PlanArgs& a) {
+StatusOr<int> RunAdvice(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd& cov,
+                        const PlanOptions& o, const PlanArgs& a) {
   Advice adv;
-  if (const Status s = Advise(sys, p, cov, o, a.horizon_s, &adv); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
+  KINCAL_RETURN_IF_ERROR(Advise(sys, p, cov, o, a.horizon_s, &adv));
   const auto& info = sys.params()[static_cast<size_t>(adv.worst)];
   std::cout << "least determined: " << info.name << " (sigma " << adv.sigma_now[adv.worst] << " "
             << info.unit << ", " << adv.worst_ratio << " x its target)\n"
@@ -167,56 +170,59 @@ int RunAdvice(const System& sys, const Eigen::VectorXd& p, const Eigen::MatrixXd
       std::vector<double>(adv.sigma_after.data(), adv.sigma_after.data() + adv.sigma_after.size());
   std::error_code ec;
   std::filesystem::create_directories(a.out, ec);
-  if (ec) throw std::runtime_error(a.out + ": cannot create the output directory: " + ec.message());
-  WriteOutput(a.out + "/advice.json", j.dump(1) + "\n", "advice");
+  if (ec) return Status::Error(a.out + ": cannot create the output directory: " + ec.message());
+  KINCAL_RETURN_IF_ERROR(WriteOutput(a.out + "/advice.json", j.dump(1) + "\n", "advice"));
   return 0;
 }
 
-int Run(const PlanArgs& a) {
+// The system, design point, prior and options the command line describes.
+Status SetUp(const PlanArgs& a, std::unique_ptr<System>* sys, Eigen::VectorXd* p,
+             Eigen::MatrixXd* prior, PlanOptions* o) {
   if (!a.checkpoint.empty() && !a.report.empty()) {
-    throw std::runtime_error("--checkpoint and --report: one prior at most");
+    return Status::Error("--checkpoint and --report: one prior at most");
   }
   if (!a.arena.empty() && (!a.camera.empty() || !a.floor.empty())) {
-    throw std::runtime_error("--arena, or --camera with --floor: one workspace");
+    return Status::Error("--arena, or --camera with --floor: one workspace");
   }
   std::vector<std::string> effects;
   if (const Status s = ParseEffectList(a.effects, &effects); !s.ok())
-    throw std::runtime_error("--effects: " + s.message());
+    return Status::Error("--effects: " + s.message());
+  KINCAL_RETURN_IF_ERROR(MakeSystem(a.model, effects, {}, sys));
+  KINCAL_RETURN_IF_ERROR(DesignPoint(**sys, a, p, prior));
+  KINCAL_ASSIGN_OR_RETURN(const auto prior_sigma, ParseMap(a.prior, "--prior"));
+  if (const Status s = SetPriorSigma(**sys, prior_sigma, prior); !s.ok())
+    return Status::Error("--" + s.message());
+  KINCAL_ASSIGN_OR_RETURN(*o, OptionsFrom(**sys, a));
+  KINCAL_ASSIGN_OR_RETURN(const auto fixed, ParseMap(a.fix, "--fix"));
+  if (const Status s = HoldParameters(**sys, fixed, p, prior, o); !s.ok())
+    return Status::Error("--" + s.message());
+  return Status();
+}
+
+StatusOr<int> Run(const PlanArgs& a) {
   std::unique_ptr<System> sys;
-  if (const Status s = MakeSystem(a.model, effects, {}, &sys); !s.ok())
-    throw std::runtime_error(s.message());
   Eigen::VectorXd p;
   Eigen::MatrixXd prior;
-  DesignPoint(*sys, a, &p, &prior);
-  if (const Status s = SetPriorSigma(*sys, ParseMap(a.prior, "--prior"), &prior); !s.ok())
-    throw std::runtime_error("--" + s.message());
-  PlanOptions o = OptionsFrom(*sys, a);
-  if (const Status s = HoldParameters(*sys, ParseMap(a.fix, "--fix"), &p, &prior, &o); !s.ok())
-    throw std::runtime_error("--" + s.message());
+  PlanOptions o;
+  KINCAL_RETURN_IF_ERROR(SetUp(a, &sys, &p, &prior, &o));
   if (a.advise) return RunAdvice(*sys, p, prior, o, a);
-  const auto ws = WorkspaceFrom(a);
+  KINCAL_ASSIGN_OR_RETURN(const auto ws, WorkspaceFrom(a));
   std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";
   Motion plan;
   std::vector<Motion> usual;
-  if (const Status s = PlanMotion(*sys, p, prior, *ws, o, &plan, &usual); !s.ok())
-    throw std::runtime_error(s.message());
+  KINCAL_RETURN_IF_ERROR(PlanMotion(*sys, p, prior, *ws, o, &plan, &usual));
   PrintPlanSummary(*sys, o, plan, usual, std::cout);
-  if (const Status s = WritePlanFiles(a.out, *sys, p, prior, o, plan, usual); !s.ok()) {
-    throw std::runtime_error(s.message());
-  }
+  KINCAL_RETURN_IF_ERROR(WritePlanFiles(a.out, *sys, p, prior, o, plan, usual));
   if (!a.no_plot) {
     SetLcmTypesPath();
     const std::string err = RunAndWait({PythonInterpreter(), PythonScript("plot_plan.py", nullptr),
                                         a.out + "/plan.json", a.out + "/plan.png"});
     if (!err.empty()) {
-      throw std::runtime_error("plan.png: " + err +
-                               " (plan.csv and plan.json are written; --no-plot skips the plot)");
+      return Status::Error("plan.png: " + err +
+                           " (plan.csv and plan.json are written; --no-plot skips the plot)");
     }
   }
-  if (a.publish) {
-    if (const Status s = PublishPlan(*sys, plan, a.channel); !s.ok())
-      throw std::runtime_error(s.message());
-  }
+  if (a.publish) KINCAL_RETURN_IF_ERROR(PublishPlan(*sys, plan, a.channel));
   return 0;
 }
 
@@ -262,7 +268,7 @@ Command AddPlan(CLI::App& app) {
                "and the time to the targets (DIR/advice.json)");
   app.add_option("--horizon", a->horizon_s, "--advise: seconds the advised motion is held");
   app.add_option("--channel", a->channel, "LCM channel for --publish");
-  return [a] { return Run(*a); };
+  return [a]() -> StatusOr<int> { return Run(*a); };
 }
 
 }  // namespace kincal::app

@@ -233,7 +233,7 @@ Command AddReproduce(CLI::App& app) {
       ->check(CLI::IsMember({"dd2", "ekf", "ukf"}));
   app.add_flag("--no-batch", args->ov.no_batch, "skip the batch (Ceres) calibrations");
   app.add_option("--json", args->json, "write the results as JSON to this file");
-  return [args]() -> int {
+  return [args]() -> StatusOr<int> {
     const ThesisOptions o = args->ov.Resolve();
     std::string error;
     if (!o.IsValid(&error)) {
@@ -255,7 +255,7 @@ Command AddReproduce(CLI::App& app) {
     std::cout << "  target: joint DD2 NNDE <= 0.1 %: " << (dd2 <= 0.1 ? "met" : "NOT met") << " ("
               << dd2 << " %)\n";
     if (!args->json.empty()) {
-      WriteOutput(args->json, ToJson(o, r).dump(2) + "\n", "results JSON");
+      KINCAL_RETURN_IF_ERROR(WriteOutput(args->json, ToJson(o, r).dump(2) + "\n", "results JSON"));
       std::cout << "  wrote " << args->json << "\n";
     }
     return 0;

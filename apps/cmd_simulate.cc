@@ -30,8 +30,8 @@ struct SimulatedRun {
 };
 
 // The scenario's commands, the true robot's motion and the camera's noisy poses of it.
-SimulatedRun SimulateScenario(const Scenario& sc, const System& truth_sys,
-                              const VecN<kMaxState>& p_true, const std::string& config) {
+StatusOr<SimulatedRun> SimulateScenario(const Scenario& sc, const System& truth_sys,
+                                        const VecN<kMaxState>& p_true, const std::string& config) {
   SimulatedRun run;
   std::mt19937_64 rng(sc.seed);
   const TimeNs t1 = SecondsToNs(sc.duration_s);
@@ -43,7 +43,7 @@ SimulatedRun SimulateScenario(const Scenario& sc, const System& truth_sys,
     AppendPiecewiseRandom(&run.cmd, 0, t1, sc.control_low, sc.control_high, sc.min_period_s,
                           3.0 * sc.min_period_s, rng);
   } else {
-    throw std::runtime_error(config + ": controls.profile must be smooth or piecewise");
+    return Status::Error(config + ": controls.profile must be smooth or piecewise");
   }
   const auto times = FrameTimes(0, t1, sc.camera, rng);
   const StateVec x0 = truth_sys.MakeState(0.0, 0.0, 0.0, p_true, run.cmd, 0.0);
@@ -54,8 +54,10 @@ SimulatedRun SimulateScenario(const Scenario& sc, const System& truth_sys,
 }
 
 // DIR/controls.csv and DIR/poses.csv, the input of `kincal analyze`.
-void ExportRecording(const std::string& dir, const System& sys, const SimulatedRun& run) {
-  std::filesystem::create_directories(dir);
+Status ExportRecording(const std::string& dir, const System& sys, const SimulatedRun& run) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) return Status::Error(dir + ": cannot create the directory: " + ec.message());
   std::ostringstream c, p;
   c << "t";
   for (const auto& ch : sys.model().controls()) c << "," << ch.name;
@@ -69,9 +71,10 @@ void ExportRecording(const std::string& dir, const System& sys, const SimulatedR
   p << "t,x,y,theta\n" << std::setprecision(10);
   for (const auto& m : run.meas)
     p << NsToSeconds(m.t_ns) << "," << m.z.x() << "," << m.z.y() << "," << m.z.z() << "\n";
-  WriteOutput(dir + "/controls.csv", c.str(), "controls CSV");
-  WriteOutput(dir + "/poses.csv", p.str(), "poses CSV");
+  KINCAL_RETURN_IF_ERROR(WriteOutput(dir + "/controls.csv", c.str(), "controls CSV"));
+  KINCAL_RETURN_IF_ERROR(WriteOutput(dir + "/poses.csv", p.str(), "poses CSV"));
   std::cout << "wrote " << dir << "/controls.csv and poses.csv\n";
+  return Status();
 }
 
 // The guess's covariance: each sigma a fraction of the guess (or of the default sigma).
@@ -130,18 +133,90 @@ void PrintTruth(const OnlineCalibrator& cal, const std::function<double(int)>& t
   std::cout << inside << "/" << np << " parameters within 3 sigma of the truth\n";
 }
 
+struct SimulateArgs {
+  std::string config = "config/sim_diffdrive.yaml";
+  std::string csv;
+  double duration_s = 0.0;
+  uint64_t seed = 0;
+  std::string filter;
+  std::string export_dir;
+};
+
+// The scenario the command line names, with its overrides.
+StatusOr<Scenario> ScenarioFrom(const SimulateArgs& a) {
+  KINCAL_ASSIGN_OR_RETURN(Scenario sc, LoadScenario(a.config));
+  if (a.duration_s > 0.0) sc.duration_s = a.duration_s;
+  if (a.seed != 0) sc.seed = a.seed;
+  if (!a.filter.empty()) sc.filter = a.filter;
+  return sc;
+}
+
+StatusOr<int> RunSimulate(const SimulateArgs& a) {
+  KINCAL_ASSIGN_OR_RETURN(const Scenario sc, ScenarioFrom(a));
+  KINCAL_ASSIGN_OR_RETURN(const System truth_sys, MakeSystem(sc.model, sc.hidden_effects));
+  KINCAL_ASSIGN_OR_RETURN(const System est_sys, MakeSystem(sc.model, sc.estimator_effects));
+  const int nc = truth_sys.num_controls();
+  if (static_cast<int>(sc.control_low.size()) != nc ||
+      static_cast<int>(sc.control_high.size()) != nc) {
+    return Status::Error(a.config + ": controls.low/high need " + std::to_string(nc) +
+                         " values for model " + sc.model);
+  }
+  KINCAL_ASSIGN_OR_RETURN(const VecN<kMaxState> p_true,
+                          ParamsFrom(truth_sys, sc.truth, a.config + ": truth"));
+  KINCAL_ASSIGN_OR_RETURN(const VecN<kMaxState> p_guess,
+                          ParamsFrom(est_sys, sc.guess, a.config + ": guess"));
+  OnlineCalibratorOptions opt;
+  opt.filter = sc.filter;
+  opt.noise.control_psd = sc.control_psd;
+  if (std::string error; !opt.IsValid(est_sys, &error)) {
+    return Status::Error((a.filter.empty() ? a.config : std::string("--filter")) + ": " + error);
+  }
+  KINCAL_ASSIGN_OR_RETURN(const SimulatedRun run,
+                          SimulateScenario(sc, truth_sys, p_true, a.config));
+  const auto& meas = run.meas;
+  if (!a.export_dir.empty()) KINCAL_RETURN_IF_ERROR(ExportRecording(a.export_dir, truth_sys, run));
+
+  OnlineCalibrator cal(est_sys, opt, 0);
+  cal.controls() = run.cmd;
+  const int np = est_sys.num_params();
+  cal.Initialize(meas.front().t_ns, meas.front().z, run.R, p_guess,
+                 GuessCovariance(est_sys, p_guess, sc.guess_sigma_fraction));
+
+  std::ostringstream csv;  // written whole at the end
+  const bool want_csv = !a.csv.empty();
+  if (want_csv) csv << "t_s,name,value,sigma,truth\n";
+  auto truth_of = [&](int i) {
+    const int j = truth_sys.ParamIndex(est_sys.params()[static_cast<size_t>(i)].name);
+    return j < 0 ? NAN : p_true[j];
+  };
+  PrintHeader(sc, est_sys, meas.size());
+  double next_report = 0.0;
+  for (size_t k = 1; k < meas.size(); ++k) {
+    cal.AddPose(meas[k].t_ns, meas[k].z, meas[k].R);
+    const double t = NsToSeconds(meas[k].t_ns);
+    if (want_csv) {
+      const auto p = cal.params();
+      const auto C = cal.params_covariance();
+      for (int i = 0; i < np; ++i) {
+        csv << t << "," << est_sys.params()[static_cast<size_t>(i)].name << "," << p[i] << ","
+            << std::sqrt(C(i, i)) << "," << truth_of(i) << "\n";
+      }
+    }
+    if (t >= next_report) {
+      PrintRow(cal, t);
+      next_report += sc.report_every_s;
+    }
+  }
+  PrintRow(cal, NsToSeconds(meas.back().t_ns));
+  PrintTruth(cal, truth_of);
+  if (want_csv) KINCAL_RETURN_IF_ERROR(WriteOutput(a.csv, csv.str(), "convergence CSV"));
+  return 0;
+}
+
 }  // namespace
 
 Command AddSimulate(CLI::App& app) {
-  struct Args {
-    std::string config = "config/sim_diffdrive.yaml";
-    std::string csv;
-    double duration_s = 0.0;
-    uint64_t seed = 0;
-    std::string filter;
-    std::string export_dir;
-  };
-  auto args = std::make_shared<Args>();
+  auto args = std::make_shared<SimulateArgs>();
   app.add_option("--config", args->config, "scenario YAML")->capture_default_str();
   app.add_option("--csv", args->csv, "write convergence history (t_s,name,value,sigma,truth)");
   app.add_option("--duration", args->duration_s, "override duration_s");
@@ -150,67 +225,7 @@ Command AddSimulate(CLI::App& app) {
   app.add_option("--export", args->export_dir,
                  "write the simulated recording as DIR/controls.csv and DIR/poses.csv "
                  "(input for `kincal analyze`)");
-  return [args]() -> int {
-    Scenario sc = OrThrow(LoadScenario(args->config));
-    if (args->duration_s > 0.0) sc.duration_s = args->duration_s;
-    if (args->seed != 0) sc.seed = args->seed;
-    if (!args->filter.empty()) sc.filter = args->filter;
-
-    const System truth_sys = OrThrow(MakeSystem(sc.model, sc.hidden_effects));
-    const System est_sys = OrThrow(MakeSystem(sc.model, sc.estimator_effects));
-    const int nc = truth_sys.num_controls();
-    if (static_cast<int>(sc.control_low.size()) != nc ||
-        static_cast<int>(sc.control_high.size()) != nc) {
-      throw std::runtime_error(args->config + ": controls.low/high need " + std::to_string(nc) +
-                               " values for model " + sc.model);
-    }
-    const VecN<kMaxState> p_true =
-        OrThrow(ParamsFrom(truth_sys, sc.truth, args->config + ": truth"));
-    const VecN<kMaxState> p_guess =
-        OrThrow(ParamsFrom(est_sys, sc.guess, args->config + ": guess"));
-    const SimulatedRun run = SimulateScenario(sc, truth_sys, p_true, args->config);
-    const auto& meas = run.meas;
-    if (!args->export_dir.empty()) ExportRecording(args->export_dir, truth_sys, run);
-
-    OnlineCalibratorOptions opt;
-    opt.filter = sc.filter;
-    opt.noise.control_psd = sc.control_psd;
-    OnlineCalibrator cal(est_sys, opt, 0);
-    cal.controls() = run.cmd;
-    const int np = est_sys.num_params();
-    cal.Initialize(meas.front().t_ns, meas.front().z, run.R, p_guess,
-                   GuessCovariance(est_sys, p_guess, sc.guess_sigma_fraction));
-
-    std::ostringstream csv;  // written whole at the end
-    const bool want_csv = !args->csv.empty();
-    if (want_csv) csv << "t_s,name,value,sigma,truth\n";
-    auto truth_of = [&](int i) {
-      const int j = truth_sys.ParamIndex(est_sys.params()[static_cast<size_t>(i)].name);
-      return j < 0 ? NAN : p_true[j];
-    };
-    PrintHeader(sc, est_sys, meas.size());
-    double next_report = 0.0;
-    for (size_t k = 1; k < meas.size(); ++k) {
-      cal.AddPose(meas[k].t_ns, meas[k].z, meas[k].R);
-      const double t = NsToSeconds(meas[k].t_ns);
-      if (want_csv) {
-        const auto p = cal.params();
-        const auto C = cal.params_covariance();
-        for (int i = 0; i < np; ++i) {
-          csv << t << "," << est_sys.params()[static_cast<size_t>(i)].name << "," << p[i] << ","
-              << std::sqrt(C(i, i)) << "," << truth_of(i) << "\n";
-        }
-      }
-      if (t >= next_report) {
-        PrintRow(cal, t);
-        next_report += sc.report_every_s;
-      }
-    }
-    PrintRow(cal, NsToSeconds(meas.back().t_ns));
-    PrintTruth(cal, truth_of);
-    if (want_csv) WriteOutput(args->csv, csv.str(), "convergence CSV");
-    return 0;
-  };
+  return [args]() -> StatusOr<int> { return RunSimulate(*args); };
 }
 
 }  // namespace kincal::app

@@ -15,9 +15,9 @@ Command AddView(CLI::App& app) {
   app.footer(
       "Runs scripts/kincal_view.py with the venv's Python; `kincal view --help` lists "
       "its options.");
-  return [&app]() -> int {
-    ExecPythonScript("kincal_view.py", "KINCAL_VIEW_SCRIPT", app.remaining(),
-                     "aiohttp, plotly and lcm");
+  return [&app]() -> StatusOr<int> {
+    return ExecPythonScript("kincal_view.py", "KINCAL_VIEW_SCRIPT", app.remaining(),
+                            "aiohttp, plotly and lcm");
   };
 }
 

@@ -9,6 +9,7 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <sstream>
 
 #include "board.h"
@@ -21,18 +22,20 @@ namespace kincal::app {
 namespace {
 
 // An image in the format its extension names (.png, .jpg, ...), written whole or not at all.
-void WriteImage(const std::string& path, const cv::Mat& image) {
+Status WriteImage(const std::string& path, const cv::Mat& image) {
   std::vector<uint8_t> bytes;
   const std::string ext = std::filesystem::path(path).extension().string();
-  if (ext.empty() || !cv::imencode(ext, image, bytes)) {
-    throw std::runtime_error(path + ": cannot encode an image for the extension '" + ext +
-                             "' (expected .png, .jpg, .bmp, ...)");
+  bool encoded = false;
+  try {
+    encoded = !ext.empty() && cv::imencode(ext, image, bytes);
+  } catch (const cv::Exception&) {  // OpenCV has no encoder for the extension
+    encoded = false;
   }
-  WriteOutput(path, std::string(bytes.begin(), bytes.end()), "image");
-}
-
-vision::TargetLayout LoadLayout(const std::string& path) {
-  return OrThrow(vision::ReadTargetLayoutYaml(path));
+  if (!encoded) {
+    return Status::Error(path + ": cannot encode an image for the extension '" + ext +
+                         "' (expected .png, .jpg, .bmp, ...)");
+  }
+  return WriteOutput(path, std::string(bytes.begin(), bytes.end()), "image");
 }
 
 }  // namespace
@@ -42,8 +45,8 @@ Command AddTarget(CLI::App& app) {
   auto layout_file = std::make_shared<std::string>();
   app.add_option("--out", *out, "SVG file to write (print at 100 % scale)")->required();
   app.add_option("--layout", *layout_file, "target layout YAML (default: the thesis plate)");
-  return [out, layout_file]() -> int {
-    const auto layout = LoadLayout(*layout_file);
+  return [out, layout_file]() -> StatusOr<int> {
+    KINCAL_ASSIGN_OR_RETURN(const auto layout, vision::ReadTargetLayoutYaml(*layout_file));
     const double x0 = -0.5 * layout.plate_size_m.x(), x1 = -x0;
     const double y0 = -0.5 * layout.plate_size_m.y(), y1 = -y0;
     const double pad = 0.0;
@@ -68,7 +71,7 @@ Command AddTarget(CLI::App& app) {
       << "' font-size='3' fill='red'>y</text>\n<text x='2' y='" << h - 2
       << "' font-size='2.5'>kincal target '" << layout.name << "', markers "
       << layout.marker_radius_m * 2e3 << " mm, print at 100 %</text>\n</svg>\n";
-    WriteOutput(*out, f.str(), "target SVG");
+    KINCAL_RETURN_IF_ERROR(WriteOutput(*out, f.str(), "target SVG"));
     std::cout << "wrote " << *out << " (" << w << " x " << h << " mm)\n";
     return 0;
   };
@@ -97,10 +100,10 @@ Command AddRender(CLI::App& app) {
       "render a board lying on the floor instead: chessboard|circles|acircles:COLSxROWS:PITCH");
   app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
   app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
-  return [a]() -> int {
+  return [a]() -> StatusOr<int> {
     vision::CameraModel cam;
     if (!a->intrinsics.empty()) {
-      cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
+      KINCAL_ASSIGN_OR_RETURN(cam, vision::ReadCameraYaml(a->intrinsics));
     } else {
       cam.width = 640;
       cam.height = 480;
@@ -118,30 +121,28 @@ Command AddRender(CLI::App& app) {
     std::mt19937_64 rng(a->seed);
     vision::RenderOptions ro;
     ro.noise_sigma = a->noise;
-    vision::TargetLayout layout = LoadLayout(a->layout);
+    KINCAL_ASSIGN_OR_RETURN(vision::TargetLayout layout, vision::ReadTargetLayoutYaml(a->layout));
+    std::optional<Board> board;
     if (!a->board.empty()) {
-      const Board board = Board::Parse(a->board);
+      KINCAL_ASSIGN_OR_RETURN(board, Board::Parse(a->board));
       layout.name = a->board;
       layout.markers.clear();
-      for (const auto& p : board.Points()) layout.markers.emplace_back(p.x(), p.y());
-      layout.marker_radius_m = board.pitch / 4.0;
+      for (const auto& p : board->Points()) layout.markers.emplace_back(p.x(), p.y());
+      layout.marker_radius_m = board->pitch / 4.0;
       pose.R = R_cf * Eigen::AngleAxisd(a->theta, Eigen::Vector3d::UnitZ()).toRotationMatrix() *
                Eigen::AngleAxisd(a->tilt, Eigen::Vector3d::UnitX()).toRotationMatrix();
       pose.t = R_cf * Eigen::Vector3d(a->x, a->y, 0.0) + t_cf;  // on the floor (tilted about x)
     }
-    if (!a->intrinsics_out.empty()) {
-      if (const Status s = vision::WriteCameraYaml(cam, a->intrinsics_out); !s.ok())
-        throw std::runtime_error(s.message());
-    }
-    if (!a->board.empty() && Board::Parse(a->board).kind == "chessboard") {
-      const Board board = Board::Parse(a->board);
+    if (!a->intrinsics_out.empty())
+      KINCAL_RETURN_IF_ERROR(vision::WriteCameraYaml(cam, a->intrinsics_out));
+    if (board && board->kind == "chessboard") {
       const auto fr =
-          vision::RenderChessboard(cam, pose, board.cols, board.rows, board.pitch, ro, rng);
-      WriteImage(a->out, fr.image);
+          vision::RenderChessboard(cam, pose, board->cols, board->rows, board->pitch, ro, rng);
+      KINCAL_RETURN_IF_ERROR(WriteImage(a->out, fr.image));
       return 0;
     }
     const auto fr = vision::RenderTarget(cam, pose, layout, ro, rng);
-    WriteImage(a->out, fr.image);
+    KINCAL_RETURN_IF_ERROR(WriteImage(a->out, fr.image));
     std::cout << std::fixed << std::setprecision(4);
     for (size_t i = 0; i < fr.centres.size() && a->board.empty(); ++i) {
       std::cout << "M" << i + 1 << " true centre (" << fr.centres[i].x() << ", "
@@ -164,9 +165,9 @@ Command AddDetect(CLI::App& app) {
   app.add_flag("--light-on-dark", a->light_on_dark, "markers brighter than the background");
   app.add_option("--threshold", a->threshold, "fixed threshold (default: Otsu)");
   app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
-  return [a]() -> int {
+  return [a]() -> StatusOr<int> {
     const cv::Mat grey = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
-    if (grey.empty()) throw std::runtime_error(a->image + ": unreadable image");
+    if (grey.empty()) return Status::Error(a->image + ": unreadable image");
     vision::DetectorOptions opt;
     opt.dark_on_light = !a->light_on_dark;
     opt.threshold = a->threshold;
@@ -174,14 +175,14 @@ Command AddDetect(CLI::App& app) {
     auto markers = vision::DetectMarkers(grey, opt, {}, &rejected);
     cv::Mat vis;
     cv::cvtColor(grey, vis, cv::COLOR_GRAY2BGR);
-    const auto layout = LoadLayout(a->layout);
+    KINCAL_ASSIGN_OR_RETURN(const auto layout, vision::ReadTargetLayoutYaml(a->layout));
     std::string pose_text;
     if (!a->intrinsics.empty()) {
-      const auto cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
+      KINCAL_ASSIGN_OR_RETURN(const auto cam, vision::ReadCameraYaml(a->intrinsics));
       if (cam.width != grey.cols || cam.height != grey.rows) {
-        throw std::runtime_error(a->image + ": image is " + std::to_string(grey.cols) + "x" +
-                                 std::to_string(grey.rows) + " but " + a->intrinsics + " is for " +
-                                 std::to_string(cam.width) + "x" + std::to_string(cam.height));
+        return Status::Error(a->image + ": image is " + std::to_string(grey.cols) + "x" +
+                             std::to_string(grey.rows) + " but " + a->intrinsics + " is for " +
+                             std::to_string(cam.width) + "x" + std::to_string(cam.height));
       }
       if (vision::IdentifyTarget(cam, layout, &markers)) {
         std::vector<Eigen::Vector3d> obj;
@@ -227,7 +228,7 @@ Command AddDetect(CLI::App& app) {
       cv::putText(vis, pose_text, {8, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {255, 80, 0});
       std::cout << "pose: " << pose_text << "\n";
     }
-    if (!a->overlay.empty()) WriteImage(a->overlay, vis);
+    if (!a->overlay.empty()) KINCAL_RETURN_IF_ERROR(WriteImage(a->overlay, vis));
     return markers.empty() ? 1 : 0;
   };
 }
@@ -243,15 +244,15 @@ Command AddFloorcal(CLI::App& app) {
   app.add_option("--intrinsics", a->intrinsics, "camera YAML")->required();
   app.add_option("--out", a->out, "YAML with the floor extrinsics and their covariance")
       ->required();
-  return [a]() -> int {
-    const Board board = Board::Parse(a->board);
+  return [a]() -> StatusOr<int> {
+    KINCAL_ASSIGN_OR_RETURN(const Board board, Board::Parse(a->board));
     const std::string& kind = board.kind;
     const int cols = board.cols, rows = board.rows;
-    const auto cam = OrThrow(vision::ReadCameraYaml(a->intrinsics));
+    KINCAL_ASSIGN_OR_RETURN(const auto cam, vision::ReadCameraYaml(a->intrinsics));
     const cv::Mat img = cv::imread(a->image, cv::IMREAD_GRAYSCALE);
-    if (img.empty()) throw std::runtime_error(a->image + ": unreadable image");
+    if (img.empty()) return Status::Error(a->image + ": unreadable image");
     if (img.cols != cam.width || img.rows != cam.height)
-      throw std::runtime_error(a->image + ": size differs from the intrinsics' image size");
+      return Status::Error(a->image + ": size differs from the intrinsics' image size");
     std::vector<cv::Point2f> pts;
     bool found;
     if (kind == "chessboard") {
@@ -264,13 +265,13 @@ Command AddFloorcal(CLI::App& app) {
           img, {cols, rows}, pts,
           kind == "circles" ? cv::CALIB_CB_SYMMETRIC_GRID : cv::CALIB_CB_ASYMMETRIC_GRID);
     }
-    if (!found) throw std::runtime_error(a->image + ": board " + a->board + " not found");
+    if (!found) return Status::Error(a->image + ": board " + a->board + " not found");
     const std::vector<Eigen::Vector3d> obj = board.Points();
     std::vector<Eigen::Vector2d> norm;
     for (const auto& p : pts) norm.push_back(cam.PixelToNormalized({p.x, p.y}));
     vision::Pose3 init;
     if (!vision::PlanarInitialPose(obj, norm, &init))
-      throw std::runtime_error(a->image + ": degenerate board view");
+      return Status::Error(a->image + ": degenerate board view");
     auto r = vision::LowePose(obj, norm, init, cam.fx, 1.0);
     // Floor frame with z up, towards the camera: flip the board frame if its z points down.
     if ((-(r.pose.R.transpose() * r.pose.t)).z() < 0)
@@ -287,7 +288,7 @@ Command AddFloorcal(CLI::App& app) {
     for (int i = 0; i < 6; ++i)
       for (int j = 0; j < 6; ++j) C.at<double>(i, j) = cov(i, j);
     fs << "R_cf" << R << "t_cf" << t << "covariance_t_rot" << C << "rms_px" << r.rms_px;
-    WriteOutput(a->out, fs.releaseAndGetString(), "floor extrinsics");
+    KINCAL_RETURN_IF_ERROR(WriteOutput(a->out, fs.releaseAndGetString(), "floor extrinsics"));
     std::cout << std::fixed << std::setprecision(4)
               << "camera height above the floor plane: " << (-(r.pose.R.transpose() * r.pose.t)).z()
               << " m; t_cf = [" << r.pose.t.transpose() << "] m (1-sigma " << std::sqrt(cov(0, 0))

@@ -1,10 +1,10 @@
 // Subcommands of the `kincal` tool. Each registers its options on the CLI11 app and
-// returns the function that runs it (exit code).
+// returns the function that runs it: its exit code, or the error main() prints before
+// exiting 1.
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <functional>
-#include <stdexcept>
 #include <string>
 
 #include "kincal/io/checkpoint.h"
@@ -12,29 +12,36 @@
 
 namespace kincal::app {
 
-using Command = std::function<int()>;
+using Command = std::function<StatusOr<int>()>;
 
 // The largest image the tool decodes (pixels); main() hands it to OpenCV's decoders
 // (OPENCV_IO_MAX_IMAGE_PIXELS), so that a huge image is refused before it is decompressed.
 inline constexpr long kMaxImagePixels = 64L << 20;
 
-// Writes a tool's output whole or not at all (kincal/io/output_file.h); throws
-// std::runtime_error with the status's message, which main() prints before exiting 1.
-void WriteOutput(const std::string& path, const std::string& text, const char* what);
+// Inside a function returning Status or StatusOr<T>: returns the error of `expr` (a
+// Status), if it is one.
+#define KINCAL_RETURN_IF_ERROR(expr)                                                           \
+  do {                                                                                         \
+    if (::kincal::Status kincal_status_ = (expr); !kincal_status_.ok()) return kincal_status_; \
+  } while (false)
 
-// A library function's error as the std::runtime_error a command reports and exits 1 on
-// (main() prints it).
-template <typename T>
-T OrThrow(StatusOr<T> v) {
-  if (!v.ok()) throw std::runtime_error(v.status().message());
-  return std::move(v).value();
-}
+#define KINCAL_STATUS_CONCAT_INNER(a, b) a##b
+#define KINCAL_STATUS_CONCAT(a, b) KINCAL_STATUS_CONCAT_INNER(a, b)
+// Inside a function returning Status or StatusOr<T>: `lhs = ` the value of `expr` (a
+// StatusOr), or returns its error.
+#define KINCAL_ASSIGN_OR_RETURN(lhs, expr) \
+  KINCAL_ASSIGN_OR_RETURN_IMPL(KINCAL_STATUS_CONCAT(kincal_or_, __LINE__), lhs, expr)
+#define KINCAL_ASSIGN_OR_RETURN_IMPL(tmp, lhs, expr) \
+  auto tmp = (expr);                                 \
+  if (!tmp.ok()) return tmp.status();                \
+  lhs = std::move(tmp).value()
+
+// Writes a tool's output whole or not at all (kincal/io/output_file.h).
+Status WriteOutput(const std::string& path, const std::string& text, const char* what);
 
 // An analyze report.json's final estimate as a checkpoint; its covariance is diagonal (the
-// report keeps only sigma). Throws std::runtime_error naming the file and field.
-Checkpoint ReadReportAsCheckpoint(const std::string& path);
-// ReadCheckpoint's error as the std::runtime_error a command reports and exits 1 on.
-Checkpoint ReadCheckpointOrThrow(const std::string& path);
+// report keeps only sigma). An error names the file and field.
+StatusOr<Checkpoint> ReadReportAsCheckpoint(const std::string& path);
 
 Command AddReproduce(CLI::App& app);
 Command AddSimulate(CLI::App& app);

@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   std::map<CLI::App*, kincal::app::Command> commands;
   auto* models = app.add_subcommand("models", "list kinematic models, effects and filters");
-  commands[models] = [] {
+  commands[models] = []() -> kincal::StatusOr<int> {
     for (const auto& name : kincal::ModelRegistry::Instance().Names()) {
       auto m = kincal::MakeModel(name).value();
       std::cout << "model " << name << ": " << m->description() << "\n  params:";
@@ -71,8 +71,15 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  // The commands report errors as statuses; the catch is for what a library throws (an
+  // allocation that fails), which is still said, not a crash.
   try {
-    for (auto* sub : app.get_subcommands()) return commands.at(sub)();
+    for (auto* sub : app.get_subcommands()) {
+      const kincal::StatusOr<int> code = commands.at(sub)();
+      if (code.ok()) return code.value();
+      std::cerr << "kincal: error: " << code.status().message() << "\n";
+      return 1;
+    }
   } catch (const std::exception& e) {
     std::cerr << "kincal: error: " << e.what() << "\n";
     return 1;

@@ -49,8 +49,8 @@ void SetLcmTypesPath() {
   if (fs::exists(types)) ::setenv("KINCAL_LCM_TYPES", types.c_str(), 1);
 }
 
-void ExecPythonScript(const std::string& name, const char* env,
-                      const std::vector<std::string>& args, const std::string& needs) {
+Status ExecPythonScript(const std::string& name, const char* env,
+                        const std::vector<std::string>& args, const std::string& needs) {
   std::vector<std::string> all = {PythonInterpreter(), PythonScript(name, env)};
   all.insert(all.end(), args.begin(), args.end());
   SetLcmTypesPath();
@@ -58,8 +58,8 @@ void ExecPythonScript(const std::string& name, const char* env,
   for (auto& a : all) argv.push_back(a.data());
   argv.push_back(nullptr);
   ::execvp(argv[0], argv.data());
-  throw std::runtime_error("cannot run " + all[0] + " " + all[1] + ": " + std::strerror(errno) +
-                           " (set KINCAL_PYTHON to a Python with " + needs + ")");
+  return Status::Error("cannot run " + all[0] + " " + all[1] + ": " + std::strerror(errno) +
+                       " (set KINCAL_PYTHON to a Python with " + needs + ")");
 }
 
 std::string RunAndWait(const std::vector<std::string>& args) {

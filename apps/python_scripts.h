@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "kincal/status.h"
+
 namespace kincal::app {
 
 // $KINCAL_PYTHON, else the source tree's venv (scripts/setup makes it), else python3.
@@ -15,10 +17,10 @@ std::string PythonScript(const std::string& name, const char* env);
 // Points KINCAL_LCM_TYPES at the build tree's generated Python types when unset.
 void SetLcmTypesPath();
 // Runs scripts/NAME (PythonScript(name, env)) with the venv's Python and `args` in this
-// process's place (the LCM types' path set); returns only to throw an error naming the
-// command and `needs` (what the Python must have).
-[[noreturn]] void ExecPythonScript(const std::string& name, const char* env,
-                                   const std::vector<std::string>& args, const std::string& needs);
+// process's place (the LCM types' path set); returns only with an error naming the command
+// and `needs` (what the Python must have).
+Status ExecPythonScript(const std::string& name, const char* env,
+                        const std::vector<std::string>& args, const std::string& needs);
 // Runs `args` (args[0] found on PATH) and waits; an error names the program and its exit.
 std::string RunAndWait(const std::vector<std::string>& args);
 
