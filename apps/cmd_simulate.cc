@@ -174,6 +174,12 @@ StatusOr<int> RunSimulate(const SimulateArgs& a) {
   KINCAL_ASSIGN_OR_RETURN(const SimulatedRun run,
                           SimulateScenario(sc, truth_sys, p_true, a.config));
   const auto& meas = run.meas;
+  if (meas.empty()) {
+    std::ostringstream why;
+    why << a.config << ": the simulated camera gave no pose in its " << sc.duration_s
+        << " s (duration_s, camera.rate_hz, camera.dropout_prob)";
+    return Status::Error(why.str());
+  }
   if (!a.export_dir.empty()) KINCAL_RETURN_IF_ERROR(ExportRecording(a.export_dir, truth_sys, run));
 
   OnlineCalibrator cal(est_sys, opt, 0);
