@@ -1,8 +1,5 @@
 #include "vision/opencv_file.h"
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
 #include <sstream>
 
 #include "kincal/text.h"
@@ -10,8 +7,9 @@
 namespace kincal::vision {
 
 Status OpenOpenCvFile(const std::string& path, const char* what, cv::FileStorage* fs) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) return Status::Error(path + ": cannot open " + what + ": " + std::strerror(errno));
+  const StatusOr<std::string> raw = ReadTextFile(path, what, kMaxOpenCvFileBytes);
+  if (!raw.ok()) return raw.status();
+  std::istringstream in(raw.value());
   std::string text, line;
   bool first = true;
   while (std::getline(in, line)) {
@@ -19,10 +17,6 @@ Status OpenOpenCvFile(const std::string& path, const char* what, cv::FileStorage
     first = false;
     text += line;
     text += '\n';
-    if (text.size() > kMaxOpenCvFileBytes) {
-      return Status::Error(path + ": larger than " + std::to_string(kMaxOpenCvFileBytes) +
-                           " bytes: not a " + what + " file");
-    }
   }
   try {
     fs->open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY);

@@ -13,8 +13,8 @@ namespace kincal::vision {
 // The largest FileStorage file read (a camera or floor file is a few kB).
 inline constexpr size_t kMaxOpenCvFileBytes = 16 << 20;
 
-// Opens `path` for reading into *fs; an error names the file (errno's text, size, or
-// OpenCV's parse error). `what` says what the file should be, for "cannot open".
+// Opens `path` for reading into *fs; an error names the file (errno's text, a folder, its
+// size, or OpenCV's parse error). `what` says what the file should be, for "cannot open".
 Status OpenOpenCvFile(const std::string& path, const char* what, cv::FileStorage* fs);
 
 }  // namespace kincal::vision

@@ -1,5 +1,5 @@
 // OpenOpenCvFile (src/vision/opencv_file.cc): what OpenCV writes, and the same saved with a
-// byte-order mark and CRLF, read alike; missing and garbage files named.
+// byte-order mark and CRLF, read alike; missing and garbage files and a folder named.
 #include "vision/opencv_file.h"
 
 #include <gtest/gtest.h>
@@ -48,6 +48,9 @@ TEST(OpenCvFile, MissingAndGarbageFilesAreNamed) {
   const Status b = OpenOpenCvFile(garbage, "camera", &fs);
   EXPECT_FALSE(b.ok());
   EXPECT_NE(b.message().find("kincal_ocv_garbage.yaml"), std::string::npos) << b.message();
+  // A folder given for the file: named with errno's text, not OpenCV's assertion text.
+  const Status c = OpenOpenCvFile(dir.string(), "camera", &fs);
+  EXPECT_EQ(c.message(), dir.string() + ": cannot open camera: Is a directory");
 }
 
 }  // namespace
