@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
+#include <type_traits>
 
 #include "kincal/text.h"
 
@@ -86,6 +88,12 @@ class Section {
       *out = node_[key].as<T>();
     } catch (const YAML::Exception& e) {
       throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key + "': " + e.msg);
+    }
+    if constexpr (std::is_floating_point_v<T>) {
+      if (!std::isfinite(*out)) {
+        throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key +
+                          "': a finite number expected, got '" + node_[key].Scalar() + "'");
+      }
     }
   }
   // One of a fixed set of names, turned into its enum value here, once.

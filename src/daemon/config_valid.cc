@@ -92,6 +92,7 @@ bool SimOptions::IsValid(std::string* error) const {
                     " s (30 days); 0 takes the scenario's",
                 error) &&
          Expect(chunk_s >= 1.0 && chunk_s <= 3600.0, "sim.chunk_s must be in [1, 3600] s", error) &&
+         Expect(speed >= 0, "sim.speed (or --speed) must be >= 0 (0: --fast)", error) &&
          Expect(reflection_prob >= 0 && reflection_prob <= 1 && occlusion_prob >= 0 &&
                     occlusion_prob <= 1,
                 "sim.reflection_prob and occlusion_prob must be in [0, 1]", error) &&
@@ -103,7 +104,7 @@ bool SimOptions::IsValid(std::string* error) const {
 
 bool ReplayOptions::IsValid(std::string* error) const {
   return Expect(!path.empty(), "replay.path (or --replay FILE) must name an LCM log", error) &&
-         Expect(speed >= 0, "replay.speed must be >= 0 (0: --fast)", error) &&
+         Expect(speed >= 0, "replay.speed (or --speed) must be >= 0 (0: --fast)", error) &&
          Expect(loops >= 1, "replay.loops must be >= 1", error) &&
          Expect(std::all_of(pose_sigma.begin(), pose_sigma.end(),
                             [](double v) { return std::isfinite(v) && v > 0; }),

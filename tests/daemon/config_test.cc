@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -147,6 +148,24 @@ TEST(DaemonConfig, WrongTypeAndBadValuesAreNamed) {
   c = DaemonConfig{};
   c.robot.guess["wheel_radius"] = 0.1;
   EXPECT_NE(ValidError(c).find("no parameter 'wheel_radius'"), std::string::npos) << ValidError(c);
+}
+
+// A number that is not finite (YAML's .nan and .inf) is refused where it is read, for every
+// key; a negative or NaN sim.speed (the config's or --speed's) by the source's own check.
+TEST(DaemonConfig, NonFiniteNumbersAndANegativeSpeedAreNamed) {
+  const std::string nan = WriteConfig("nan_speed.yaml", "source: sim\nsim:\n  speed: .nan\n");
+  EXPECT_EQ(LoadError(nan), nan + ":3: key 'sim.speed': a finite number expected, got '.nan'");
+  const std::string inf = WriteConfig("inf_height.yaml", "camera:\n  nadir_height_m: .inf\n");
+  EXPECT_NE(LoadError(inf).find(":2: key 'camera.nadir_height_m': a finite number expected"),
+            std::string::npos)
+      << LoadError(inf);
+  DaemonConfig c;
+  c.source = SourceKind::kSim;
+  c.sim.speed = -3;
+  EXPECT_NE(ValidError(c).find("sim.speed (or --speed) must be >= 0"), std::string::npos)
+      << ValidError(c);
+  c.sim.speed = std::nan("");
+  EXPECT_NE(ValidError(c).find("sim.speed (or --speed) must be >= 0"), std::string::npos);
 }
 
 // robot.fixed: read from YAML, and a name that is not one of the model's parameters, or
