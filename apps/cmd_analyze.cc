@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "kincal/analysis/analyze.h"
 #include "kincal/analysis/option_lists.h"
+#include "options.h"
 
 namespace kincal::app {
 namespace {
@@ -223,7 +224,7 @@ Command AddAnalyze(CLI::App& app) {
       ->capture_default_str();
   app.add_option("--counts-per-rev", a->counts_per_rev,
                  "with --controls-kind position: encoder counts per wheel revolution (0: rad)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(AtLeastZero());
   app.add_option("--heldout-runs", a->heldout_runs,
                  "runs held out (1-based, e.g. 3,6,9; default: every third run)");
   app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");

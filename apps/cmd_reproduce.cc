@@ -5,33 +5,37 @@
 #include <iomanip>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "commands.h"
 #include "kincal/sim/thesis.h"
+#include "options.h"
 
 namespace kincal::app {
 namespace {
 
 // Options a user set on the command line, applied over the chosen world's preset.
+// What the command line changes of the world's options (each unset unless given).
 struct Overrides {
   bool ideal = false, no_batch = false;
   std::vector<std::string> filters;
-  int runs = 99, trials = 1, frames = -1, runs_per_day = -1;
+  int runs = 99, trials = 1;
+  std::optional<int> frames, runs_per_day;
   uint64_t seed = 1;
-  double centroid = -1, gain = -1, step = -1, stamp = -1;
+  std::optional<double> centroid, gain, step, stamp;
   ThesisOptions Resolve() const {
     ThesisOptions o = ideal ? ThesisOptions::Ideal() : ThesisOptions::Realistic();
     o.runs = runs;
     o.trials = trials;
     o.seed = seed;
-    if (frames >= 0) o.frames_per_run = frames;
-    if (centroid > 0) (ideal ? o.centroid_sigma_px : o.pixel.centroid_sigma_px) = centroid;
-    if (gain >= 0) o.wheel.gain_sigma = gain;
-    if (gain == 0) o.nuisance_gains = false;
-    if (step >= 0) o.wheel.command_step_rad_s = step;
-    if (stamp >= 0) o.stamp_step_s = stamp;
-    if (runs_per_day >= 0) o.pixel.calibration.enabled = runs_per_day > 0;
-    if (runs_per_day > 0) o.pixel.calibration.runs_per_day = runs_per_day;
+    if (frames) o.frames_per_run = *frames;
+    if (centroid) (ideal ? o.centroid_sigma_px : o.pixel.centroid_sigma_px) = *centroid;
+    if (gain) o.wheel.gain_sigma = *gain;
+    if (gain == 0.0) o.nuisance_gains = false;
+    if (step) o.wheel.command_step_rad_s = *step;
+    if (stamp) o.stamp_step_s = *stamp;
+    if (runs_per_day) o.pixel.calibration.enabled = *runs_per_day > 0;
+    if (runs_per_day > 0) o.pixel.calibration.runs_per_day = *runs_per_day;
     if (!filters.empty()) o.filters = filters;
     if (no_batch) o.batch = false;
     return o;
@@ -215,19 +219,25 @@ Command AddReproduce(CLI::App& app) {
   app.add_option("--trials", args->ov.trials, "Monte-Carlo repetitions (RMS over trials)")
       ->capture_default_str();
   app.add_option("--frames", args->ov.frames,
-                 "frames per run (realistic: 128; ideal: 0 = one full turn)");
+                 "frames per run (realistic: 128; ideal: 0 = one full turn)")
+      ->check(AtLeastZero());
   app.add_option("--centroid-sigma", args->ov.centroid,
                  "marker centre noise per axis, px (realistic: 0.1414, the thesis's 0.02 px^2; "
-                 "ideal: 0.02)");
+                 "ideal: 0.02)")
+      ->check(AboveZero());
   app.add_option("--wheel-gain-sigma", args->ov.gain,
-                 "look-up-table gain error per wheel and speed band (fraction; 0: none)");
+                 "look-up-table gain error per wheel and speed band (fraction; 0: none)")
+      ->check(AtLeastZero());
   app.add_option("--command-step", args->ov.step,
-                 "wheel-rate command resolution, rad/s (thesis 7.3.2: 0.1; 0: exact)");
+                 "wheel-rate command resolution, rad/s (thesis 7.3.2: 0.1; 0: exact)")
+      ->check(AtLeastZero());
   app.add_option("--stamp-step", args->ov.stamp,
-                 "frame timestamps on a timer of this tick, s (0: exact)");
+                 "frame timestamps on a timer of this tick, s (0: exact)")
+      ->check(AtLeastZero());
   app.add_option("--runs-per-day", args->ov.runs_per_day,
                  "realistic: the camera and floor calibrated anew every N runs, the poses "
-                 "solved with that day's calibration (default 10; 0: the true camera)");
+                 "solved with that day's calibration (default 10; 0: the true camera)")
+      ->check(AtLeastZero());
   app.add_option("--filters", args->ov.filters, "filters to run (default dd2,ekf,ukf)")
       ->delimiter(',')
       ->check(CLI::IsMember({"dd2", "ekf", "ukf"}));

@@ -17,6 +17,7 @@
 #include "kincal/vision/markers.h"
 #include "kincal/vision/pose.h"
 #include "kincal/vision/setup_files.h"
+#include "options.h"
 
 namespace kincal::app {
 namespace {
@@ -36,6 +37,18 @@ Status WriteImage(const std::string& path, const cv::Mat& image) {
                          "' (expected .png, .jpg, .bmp, ...)");
   }
   return WriteOutput(path, std::string(bytes.begin(), bytes.end()), "image");
+}
+
+// The camera `kincal render` draws with: the intrinsics file's, else 640x480 at f = 820 px.
+StatusOr<vision::CameraModel> RenderCamera(const std::string& intrinsics) {
+  if (!intrinsics.empty()) return vision::ReadCameraYaml(intrinsics);
+  vision::CameraModel cam;
+  cam.width = 640;
+  cam.height = 480;
+  cam.fx = cam.fy = 820;
+  cam.cx = 319.5;
+  cam.cy = 239.5;
+  return cam;
 }
 
 }  // namespace
@@ -93,7 +106,9 @@ Command AddRender(CLI::App& app) {
   app.add_option("--theta", a->theta, "target heading, rad");
   app.add_option("--camera-height", a->height, "nadir camera height above the floor, m")
       ->capture_default_str();
-  app.add_option("--noise", a->noise, "image noise, grey levels")->capture_default_str();
+  app.add_option("--noise", a->noise, "image noise, grey levels")
+      ->check(AtLeastZero())
+      ->capture_default_str();
   app.add_option("--seed", a->seed, "noise seed")->capture_default_str();
   app.add_option(
       "--board", a->board,
@@ -101,16 +116,13 @@ Command AddRender(CLI::App& app) {
   app.add_option("--intrinsics-out", a->intrinsics_out, "also write the camera used as YAML");
   app.add_option("--layout", a->layout, "target layout YAML (default: the thesis plate)");
   return [a]() -> StatusOr<int> {
-    vision::CameraModel cam;
-    if (!a->intrinsics.empty()) {
-      KINCAL_ASSIGN_OR_RETURN(cam, vision::ReadCameraYaml(a->intrinsics));
-    } else {
-      cam.width = 640;
-      cam.height = 480;
-      cam.fx = cam.fy = 820;
-      cam.cx = 319.5;
-      cam.cy = 239.5;
+    const double below = a->board.empty() ? a->target_height : 0.0;  // what the camera sees
+    if (!(a->height > below)) {
+      return Status::Error("--camera-height: the camera must be above the " +
+                           std::string(a->board.empty() ? "target" : "board") + " (" +
+                           std::to_string(below) + " m above the floor)");
     }
+    KINCAL_ASSIGN_OR_RETURN(const vision::CameraModel cam, RenderCamera(a->intrinsics));
     // Nadir camera: camera x = floor x, camera y = -floor y, camera z = -floor z.
     const Eigen::Matrix3d R_cf =
         Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();

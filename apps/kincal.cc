@@ -9,6 +9,7 @@
 #include "kincal/effect.h"
 #include "kincal/estimation/filter.h"
 #include "kincal/model.h"
+#include "options.h"
 
 int main(int argc, char** argv) {
   // Before any image is decoded: OpenCV reads its limit once (an environment setting the
@@ -66,6 +67,7 @@ int main(int argc, char** argv) {
   commands[view] = kincal::app::AddView(*view);
   auto* plan = app.add_subcommand("plan", "how to drive a robot to calibrate it fastest");
   commands[plan] = kincal::app::AddPlan(*plan);
+  kincal::app::RefuseNonFiniteNumbers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,44 @@
+#include "options.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <string>
+
+namespace kincal::app {
+namespace {
+
+// A check of the number `text` parses as (text that is no number is left to CLI11's own
+// conversion, which names it).
+CLI::Validator NumberCheck(std::function<bool(double)> ok, std::string expected) {
+  return CLI::Validator(
+      [ok = std::move(ok), expected = std::move(expected)](std::string& text) -> std::string {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || ok(v)) return {};
+        return expected + " expected, not '" + text + "'";
+      },
+      "");
+}
+
+}  // namespace
+
+CLI::Validator AtLeastZero() {
+  return NumberCheck([](double v) { return v >= 0; }, "a number >= 0");
+}
+
+CLI::Validator AboveZero() {
+  return NumberCheck([](double v) { return v > 0; }, "a number > 0");
+}
+
+void RefuseNonFiniteNumbers(CLI::App& app) {
+  const CLI::Validator finite =
+      NumberCheck([](double v) { return std::isfinite(v); }, "a finite number");
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    for (CLI::Option* opt : sub->get_options()) {
+      if (opt->get_type_name() == "FLOAT") opt->check(finite);
+    }
+  }
+}
+
+}  // namespace kincal::app

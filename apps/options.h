@@ -1,0 +1,17 @@
+// Checks on the `kincal` commands' options that say in words what was expected (CLI11's
+// own range checks print the type's limits in full).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace kincal::app {
+
+// A number >= 0 ("--noise: a number >= 0 expected, not '-1'").
+CLI::Validator AtLeastZero();
+// A number > 0.
+CLI::Validator AboveZero();
+// Adds to every floating-point option of every command of `app` a check that refuses nan,
+// inf and 1e999 by the option's name, before a command runs.
+void RefuseNonFiniteNumbers(CLI::App& app);
+
+}  // namespace kincal::app
