@@ -4,6 +4,7 @@
 // history as CSV (t_s,name,value,sigma,truth) for scripts/plot_convergence.py.
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -133,6 +134,9 @@ void PrintTruth(const OnlineCalibrator& cal, const std::function<double(int)>& t
   std::cout << inside << "/" << np << " parameters within 3 sigma of the truth\n";
 }
 
+// The most frames (or control samples) one run keeps in memory: 9 hours at 30 Hz.
+constexpr int kMaxSimulatedSamples = 1'000'000;
+
 struct SimulateArgs {
   std::string config = "config/sim_diffdrive.yaml";
   std::string csv;
@@ -170,6 +174,12 @@ StatusOr<int> RunSimulate(const SimulateArgs& a) {
   opt.noise.control_psd = sc.control_psd;
   if (std::string error; !opt.IsValid(est_sys, &error)) {
     return Status::Error((a.filter.empty() ? a.config : std::string("--filter")) + ": " + error);
+  }
+  if (sc.duration_s * std::max(sc.camera.rate_hz, sc.control_rate_hz) > kMaxSimulatedSamples) {
+    return Status::Error(a.config + ": kincal simulate keeps the whole run in memory: at most " +
+                         std::to_string(kMaxSimulatedSamples) +
+                         " frames or control samples (duration_s x camera.rate_hz, "
+                         "controls.rate_hz); kincald's simulated camera streams longer runs");
   }
   KINCAL_ASSIGN_OR_RETURN(const SimulatedRun run,
                           SimulateScenario(sc, truth_sys, p_true, a.config));

@@ -3,6 +3,8 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 #include <stdexcept>
 
@@ -19,15 +21,30 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+bool AllFinite(double v) { return std::isfinite(v); }
+bool AllFinite(const std::vector<double>& v) {
+  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
+}
+bool AllFinite(const std::map<std::string, double>& m) {
+  return std::all_of(m.begin(), m.end(), [](const auto& kv) { return std::isfinite(kv.second); });
+}
+template <typename T>
+bool AllFinite(const T&) {  // not a number
+  return true;
+}
+
 template <typename T>
 T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std::string& file) {
   if (!n[key]) return fallback;
+  const std::string where = file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key;
+  T value;
   try {
-    return n[key].as<T>();
+    value = n[key].as<T>();
   } catch (const YAML::Exception& e) {
-    throw ScenarioError(file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key +
-                        "': " + e.msg);
+    throw ScenarioError(where + "': " + e.msg);
   }
+  if (!AllFinite(value)) throw ScenarioError(where + "': finite numbers expected");
+  return value;
 }
 
 Scenario LoadScenarioOrThrow(const std::string& file) {
@@ -84,17 +101,37 @@ Scenario LoadScenarioOrThrow(const std::string& file) {
     }
   }
   std::string error;
-  if (!s.camera.IsValid(&error)) throw ScenarioError(file + ": camera: " + error);
-  if (!(s.duration_s > 0.0) || !(s.report_every_s > 0.0) || !(s.guess_sigma_fraction > 0.0)) {
-    throw ScenarioError(file + ": duration_s, report_every_s, guess_sigma_fraction must be > 0");
-  }
-  if (!(s.pose_sigma.array() > 0.0).all()) {
-    throw ScenarioError(file + ": camera.pose_sigma must be > 0");
-  }
+  if (!s.IsValid(&error)) throw ScenarioError(file + ": " + error);
   return s;
 }
 
 }  // namespace
+
+bool Scenario::IsValid(std::string* error) const {
+  std::string camera_error;
+  if (!camera.IsValid(&camera_error)) {
+    *error = "camera: " + camera_error;
+    return false;
+  }
+  const auto fail = [&](const char* why) {
+    *error = why;
+    return false;
+  };
+  if (!(duration_s > 0.0) || !(report_every_s > 0.0) || !(guess_sigma_fraction > 0.0))
+    return fail("duration_s, report_every_s, guess_sigma_fraction must be > 0");
+  if (!(duration_s <= kMaxScenarioDurationS))
+    return fail("duration_s must be at most 2592000 s (30 days)");
+  if (!(pose_sigma.array() > 0.0).all()) return fail("camera.pose_sigma must be > 0");
+  if (!(min_period_s > 0.0) || !(control_rate_hz > 0.0) || !(control_rate_hz <= 10000.0))
+    return fail("controls.min_period_s must be > 0 and controls.rate_hz in (0, 10000] Hz");
+  if (control_low.size() != control_high.size())
+    return fail("controls.low and controls.high need as many values");
+  for (size_t i = 0; i < control_low.size(); ++i) {
+    if (!(control_low[i] <= control_high[i]))
+      return fail("controls.low must not exceed controls.high, channel by channel");
+  }
+  return true;
+}
 
 StatusOr<Scenario> LoadScenario(const std::string& file) {
   try {
@@ -114,6 +151,8 @@ StatusOr<VecN<kMaxState>> ParamsFrom(const System& sys, const std::map<std::stri
   for (const auto& [name, v] : values) {
     const int i = sys.ParamIndex(name);
     if (i < 0) return Status::Error(what + ": unknown parameter '" + name + "'");
+    if (!std::isfinite(v))
+      return Status::Error(what + ": parameter '" + name + "': a finite number expected");
     p[i] = v;
   }
   return p;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -39,6 +40,39 @@ TEST(Scenario, NegativeDurationIsRejected) {
   const std::string e = ScenarioLoadError(path.string());
   std::filesystem::remove(path);
   EXPECT_NE(e.find("duration_s"), std::string::npos) << e;
+}
+
+// Each once ran to "parameters within 3 sigma" with exit 0 (a NaN truth, a guess at
+// infinity, low above high, a zero control rate), or ran out of memory (1e9 s).
+TEST(Scenario, NumbersThatCannotBeSimulatedAreNamed) {
+  const auto path = std::filesystem::temp_directory_path() / "kincal_scenario_numbers.yaml";
+  const std::string head = "model: unicycle\nduration_s: 2\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"truth: {k_v: .nan, k_omega: 1}\n", ":3: key 'truth': finite numbers expected"},
+      {"guess: {k_v: .inf}\n", ":3: key 'guess': finite numbers expected"},
+      {"report_every_s: .inf\n", ":3: key 'report_every_s': finite numbers expected"},
+      {"controls: {low: [.nan, -1], high: [0.5, 1]}\n", ": key 'low': finite numbers expected"},
+      {"controls: {low: [0.5, -1], high: [0.1, 1]}\n",
+       ": controls.low must not exceed controls.high, channel by channel"},
+      {"controls: {low: [0.1], high: [0.5, 1]}\n",
+       ": controls.low and controls.high need as many values"},
+      {"controls: {rate_hz: 0}\n", ": controls.min_period_s must be > 0 and controls.rate_hz"},
+      {"controls: {min_period_s: -1}\n", ": controls.min_period_s must be > 0"},
+      {"camera: {jitter_max_s: .inf}\n", ":3: key 'jitter_max_s': finite numbers expected"},
+  };
+  for (const auto& [body, expected] : cases) {
+    std::ofstream(path) << head << body;
+    const std::string e = ScenarioLoadError(path.string());
+    EXPECT_NE(e.find(expected), std::string::npos) << body << " -> " << e;
+  }
+  std::ofstream(path) << "model: unicycle\nduration_s: 1e9\n";
+  EXPECT_NE(ScenarioLoadError(path.string()).find("duration_s must be at most 2592000 s"),
+            std::string::npos);
+  std::filesystem::remove(path);
+  const System sys = MakeSystem("unicycle").value();
+  const auto nan = ParamsFrom(sys, {{"k_v", std::nan("")}}, "--init");
+  ASSERT_FALSE(nan.ok());
+  EXPECT_EQ(nan.status().message(), "--init: parameter 'k_v': a finite number expected");
 }
 
 TEST(Scenario, ParamsByNameOverTheModelsDefaults) {

@@ -33,13 +33,22 @@ struct Scenario {
   std::string filter = "dd2";
   std::vector<double> control_psd;
   double report_every_s = 10.0;
+
+  // Numbers in range: durations and rates > 0 (the duration at most kMaxDurationS), the
+  // controls' low <= high per channel, the camera's timing valid. The file's numbers are
+  // finite by the time this is asked (LoadScenario refuses others where it reads them).
+  bool IsValid(std::string* error) const;
 };
 
-// An error names the file, line and key.
+// The longest scenario (kincald's simulated camera runs at most as long: 30 days).
+inline constexpr double kMaxScenarioDurationS = 30.0 * 86400.0;
+
+// An error names the file, line and key (a number that is not finite among them), or the
+// file and what Scenario::IsValid refuses.
 StatusOr<Scenario> LoadScenario(const std::string& file);
 
 // Parameter vector of `sys`: model defaults overridden by `values` (by name). An error names
-// `what` and the unknown parameter.
+// `what` and the unknown parameter, or one whose value is not finite.
 StatusOr<VecN<kMaxState>> ParamsFrom(const System& sys, const std::map<std::string, double>& values,
                                      const std::string& what);
 
