@@ -20,8 +20,6 @@
 namespace kincal::app {
 namespace {
 
-constexpr int kMaxImageSide = 65535;
-
 // The images in `dir`, sorted by name; an error names the folder.
 StatusOr<std::vector<std::filesystem::path>> ImagesIn(const std::string& dir) {
   std::vector<std::filesystem::path> files;
@@ -102,11 +100,12 @@ Status ParseImageSize(const std::string& size, int* w, int* h) {
     return Status::Error("--image-size '" + size + "': expected WxH, e.g. 640x480");
   auto dim = [&](const std::string& text, int* v) {
     const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), *v);
-    return ec == std::errc() && end == text.data() + text.size() && *v >= 1 && *v <= kMaxImageSide;
+    return ec == std::errc() && end == text.data() + text.size() && *v >= 1 &&
+           *v <= vision::kMaxCameraSide;
   };
   if (!dim(m[1], w) || !dim(m[2], h)) {
     return Status::Error("--image-size '" + size + "': each side must be 1 to " +
-                         std::to_string(kMaxImageSide) + " pixels");
+                         std::to_string(vision::kMaxCameraSide) + " pixels");
   }
   return Status();
 }

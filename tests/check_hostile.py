@@ -72,7 +72,7 @@ for name, args, text in bad_inputs:
 results.append(run("camcal --image-size 99999999999x480",
                    ["camcal", "--points", f"{source}/tests/data/calib_points.csv", "--image-size",
                     "99999999999x480", "--out", f"{scratch}/c.yaml"], False,
-                   "each side must be 1 to 65535 pixels"))
+                   "each side must be 1 to 16384 pixels"))
 
 # camcal --images: an empty folder, and an image of 20000 x 20000 pixels (a 2.3 GB decode).
 empty_dir = os.path.join(scratch, "no_images")

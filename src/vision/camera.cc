@@ -66,6 +66,17 @@ bool CameraModel::IsValid(std::string* error) const {
     *error = "camera needs positive image size and focal lengths";
     return false;
   }
+  if (width > kMaxCameraSide || height > kMaxCameraSide) {
+    *error = "camera image size " + std::to_string(width) + "x" + std::to_string(height) +
+             " is over " + std::to_string(kMaxCameraSide) + " px a side";
+    return false;
+  }
+  for (const double v : {fx, fy, cx, cy, k1, k2, p1, p2, k3}) {
+    if (!std::isfinite(v)) {
+      *error = "camera intrinsics and distortion must be finite numbers";
+      return false;
+    }
+  }
   return true;
 }
 

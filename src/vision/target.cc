@@ -19,9 +19,19 @@ bool TargetLayout::IsValid(std::string* error) const {
     *error = "a target needs at least 4 markers";
     return false;
   }
-  if (!(marker_radius_m > 0.0)) {
+  if (!(marker_radius_m > 0.0) || !std::isfinite(marker_radius_m)) {
     *error = "marker_radius_m must be > 0";
     return false;
+  }
+  if (!(plate_size_m.array() > 0.0).all() || !plate_size_m.allFinite()) {
+    *error = "plate_size_m must be two finite sizes > 0";
+    return false;
+  }
+  for (size_t i = 0; i < markers.size(); ++i) {
+    if (!markers[i].allFinite()) {
+      *error = "marker " + std::to_string(i + 1) + ": its position must be finite";
+      return false;
+    }
   }
   for (size_t i = 0; i < markers.size(); ++i) {
     for (size_t j = i + 1; j < markers.size(); ++j) {

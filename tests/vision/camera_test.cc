@@ -3,8 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/calib3d.hpp>
 #include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
@@ -59,6 +61,25 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
   EXPECT_NE(refused.status().message().find("kincal_cam_bad.yaml: missing key 'camera_matrix'"),
             std::string::npos)
       << refused.status().message();
+}
+
+// A camera whose numbers cannot be projected with, or whose frame could not be allocated: an
+// infinite distortion once rendered centres at (-inf, -inf), and a width of 99999999 px
+// asked OpenCV for 192 GB.
+TEST(Camera, NonFiniteNumbersAndHugeImagesAreRefused) {
+  std::string error;
+  CameraModel c = TestCamera();
+  EXPECT_TRUE(c.IsValid(&error)) << error;
+  c.k1 = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "camera intrinsics and distortion must be finite numbers");
+  c = TestCamera();
+  c.cy = std::nan("");
+  EXPECT_FALSE(c.IsValid(&error));
+  c = TestCamera();
+  c.width = 99999999;
+  EXPECT_FALSE(c.IsValid(&error));
+  EXPECT_EQ(error, "camera image size 99999999x480 is over 16384 px a side");
 }
 
 // Issue 34: both camera files as Windows tools save them (CRLF, a UTF-8 byte-order mark)

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
 
 #include "vision/vision_test_util.h"
@@ -40,6 +41,15 @@ TEST(TargetLayout, TooFewOrOverlappingMarkersAreNamed) {
   error.clear();
   EXPECT_FALSE(t.IsValid(&error));
   EXPECT_FALSE(error.empty());
+  // A marker at infinity, and a plate of no size (a layout file with .inf, or 0): named.
+  t = TargetLayout::Thesis();
+  t.markers[2].x() = std::numeric_limits<double>::infinity();
+  EXPECT_FALSE(t.IsValid(&error));
+  EXPECT_EQ(error, "marker 3: its position must be finite");
+  t = TargetLayout::Thesis();
+  t.plate_size_m.x() = 0.0;
+  EXPECT_FALSE(t.IsValid(&error));
+  EXPECT_EQ(error, "plate_size_m must be two finite sizes > 0");
 }
 
 TEST(RenderTarget, CentresAreTheProjectionsAndTheMarkersAreDark) {

@@ -13,6 +13,10 @@
 
 namespace kincal::vision {
 
+// The largest image side a camera may have, px (the frame and the buffers it needs are
+// sized from the camera's file).
+inline constexpr int kMaxCameraSide = 16384;
+
 struct CameraModel {
   int width = 0, height = 0;              // px
   double fx = 0, fy = 0, cx = 0, cy = 0;  // px
@@ -26,6 +30,7 @@ struct CameraModel {
   }
   // Pixel -> normalised undistorted coordinates (iterative inversion of the distortion).
   Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& px) const;
+  // Image size 1..kMaxCameraSide a side, focal lengths > 0, every number finite.
   bool IsValid(std::string* error) const;
 };
 
