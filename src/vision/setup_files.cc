@@ -93,7 +93,8 @@ FloorExtrinsics ReadFloorYamlOrThrow(const std::string& path) {
     f.t_cf[i] = t.at<double>(i);
     for (int j = 0; j < 3; ++j) f.R_cf(i, j) = R.at<double>(i, j);
   }
-  if (!f.R_cf.allFinite() || !f.t_cf.allFinite() ||
+  if (!f.t_cf.allFinite()) throw SetupFileError(path + ": t_cf must be three finite numbers");
+  if (!f.R_cf.allFinite() ||
       (f.R_cf.transpose() * f.R_cf - Eigen::Matrix3d::Identity()).norm() > 1e-6 ||
       f.R_cf.determinant() < 0) {
     throw SetupFileError(path + ": R_cf is not a rotation");

@@ -91,6 +91,13 @@ TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
     fs << "R_cf" << R << "t_cf" << t2;
   }
   EXPECT_EQ(ErrorOf(ReadFloorYaml(short_t)), short_t + ": expected a 3-vector 't_cf'");
+  const std::string nan_t = TempPath("floor_nan.yaml");
+  {
+    cv::FileStorage fs(nan_t, cv::FileStorage::WRITE);
+    const cv::Mat t3 = (cv::Mat_<double>(3, 1) << 0.1, std::nan(""), 1.5);
+    fs << "R_cf" << R << "t_cf" << t3;
+  }
+  EXPECT_EQ(ErrorOf(ReadFloorYaml(nan_t)), nan_t + ": t_cf must be three finite numbers");
   const std::string missing = TempPath("no_floor.yaml");
   EXPECT_NE(ErrorOf(ReadFloorYaml(missing)).find(missing), std::string::npos);
 }
