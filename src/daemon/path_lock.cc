@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -14,6 +15,12 @@ PathLock::~PathLock() {
 }
 
 Status PathLock::Acquire(const std::string& path, const std::string& what) {
+  // A folder where the output goes could never be replaced by it: said now, not when the
+  // first checkpoint or the recording is written.
+  struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+    return Status::Error(path + ": the " + what + " would replace a folder: name a file");
+  }
   const std::string lock = path + ".lock";
   const int fd = ::open(lock.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) {

@@ -1,5 +1,6 @@
 // PathLock: one holder per output path; the second is told the first one's pid; the lock
-// goes with the holder; an unwritable folder is an error at once, with errno's text.
+// goes with the holder; an unwritable folder, or a folder where the file should be, is an
+// error at once.
 #include "daemon/path_lock.h"
 
 #include <gtest/gtest.h>
@@ -57,6 +58,18 @@ TEST(PathLock, AFolderThatIsNotThereIsAnErrorWithErrno) {
   EXPECT_NE(s.message().find("cannot lock the checkpoint"), std::string::npos) << s.message();
   EXPECT_NE(s.message().find("No such file or directory"), std::string::npos) << s.message();
   EXPECT_FALSE(lock.held());
+}
+
+// checkpoint.path: / ran to the end and failed at the first checkpoint, 10 s in.
+TEST(PathLock, AFolderWhereTheFileShouldBeIsRefusedAtOnce) {
+  PathLock lock;
+  const std::string folder = TempPath("a_folder");
+  std::filesystem::create_directories(folder);
+  const Status s = lock.Acquire(folder, "checkpoint");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.message(), folder + ": the checkpoint would replace a folder: name a file");
+  EXPECT_FALSE(lock.held());
+  EXPECT_FALSE(std::filesystem::exists(folder + ".lock"));
 }
 
 }  // namespace
