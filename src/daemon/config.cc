@@ -10,8 +10,8 @@
 #include <filesystem>
 #include <set>
 #include <stdexcept>
-#include <type_traits>
 
+#include "kincal/finite.h"
 #include "kincal/text.h"
 
 namespace kincal::daemon {
@@ -89,11 +89,9 @@ class Section {
     } catch (const YAML::Exception& e) {
       throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key + "': " + e.msg);
     }
-    if constexpr (std::is_floating_point_v<T>) {
-      if (!std::isfinite(*out)) {
-        throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key +
-                          "': a finite number expected, got '" + node_[key].Scalar() + "'");
-      }
+    if (!AllFinite(*out)) {
+      throw ConfigError(Where(node_[key]) + ": key '" + prefix_ + key +
+                        "': finite numbers expected");
     }
   }
   // One of a fixed set of names, turned into its enum value here, once.

@@ -152,7 +152,8 @@ bool RobotOptions::IsValid(std::string* error) const {
     if (!Expect(
             sys->ParamIndex(name) >= 0,
             "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
-            error)) {
+            error) ||
+        !Expect(std::isfinite(v), "robot.guess: '" + name + "' must be a finite number", error)) {
       return false;
     }
   }

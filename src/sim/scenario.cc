@@ -3,11 +3,11 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
 
+#include "kincal/finite.h"
 #include "kincal/text.h"
 
 namespace kincal {
@@ -20,18 +20,6 @@ class ScenarioError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-
-bool AllFinite(double v) { return std::isfinite(v); }
-bool AllFinite(const std::vector<double>& v) {
-  return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
-}
-bool AllFinite(const std::map<std::string, double>& m) {
-  return std::all_of(m.begin(), m.end(), [](const auto& kv) { return std::isfinite(kv.second); });
-}
-template <typename T>
-bool AllFinite(const T&) {  // not a number
-  return true;
-}
 
 template <typename T>
 T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std::string& file) {
