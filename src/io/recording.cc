@@ -127,6 +127,15 @@ bool ReadLine(std::istream& in, std::string* line, const std::string& path, int 
 std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
                              const std::vector<std::string>& wanted, const std::string& where,
                              int* run_col) {
+  if (cols.size() == 1) {  // a spreadsheet's other separators: said, not "lacks column 't'"
+    for (const char sep : {';', '\t', ' '}) {
+      if (cols[0].find(sep) == std::string::npos) continue;
+      throw ReadError(where + ": the header '" + Escaped(cols[0]) +
+                      "' has no comma; kincal reads comma-separated values and this file's look "
+                      "separated by '" +
+                      Escaped(std::string(1, sep)) + "'");
+    }
+  }
   std::vector<int> order;
   std::map<std::string, int> index;
   for (size_t i = 0; i < cols.size(); ++i) {

@@ -21,6 +21,18 @@ TEST_F(RecordingCsv, MissingColumnNamesFileLineAndExpectedHeader) {
       << e;
 }
 
+// A spreadsheet saved with semicolons (a decimal-comma locale) or tabs: the separator is
+// named (it read "header lacks column 't'", though the header starts with t).
+TEST_F(RecordingCsv, ASemicolonOrTabSeparatedFileIsNamedAsSuch) {
+  const std::string semi = Error("t;v;omega\n0;0.5;0.1\n", kPoses);
+  EXPECT_NE(semi.find("c.csv:1: the header 't;v;omega' has no comma; kincal reads "
+                      "comma-separated values and this file's look separated by ';'"),
+            std::string::npos)
+      << semi;
+  const std::string tab = Error("t\tv\tomega\n0\t0.5\t0.1\n", kPoses);
+  EXPECT_NE(tab.find("c.csv:1: the header 't\\tv\\tomega' has no comma"), std::string::npos) << tab;
+}
+
 TEST_F(RecordingCsv, NonNumericValueNamesLineAndColumn) {
   const std::string e = Error("t,v,omega\n0,1,0\n1,fast,0\n", kPoses);
   EXPECT_NE(e.find("c.csv:3: column 'v': expected a finite number, got 'fast'"), std::string::npos)
