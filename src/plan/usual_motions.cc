@@ -85,8 +85,13 @@ double MinTurnRadius(const System& sys, const Eigen::VectorXd& p, const PlanOpti
   return k >= 999.0 ? 0.0 : 1.1 / std::max(k, 1e-9);
 }
 
-Motion FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
-                  const std::string& name, const std::vector<Piece>& pieces) {
+std::optional<Motion> FromPieces(const System& sys, const Eigen::VectorXd& p, const PlanOptions& o,
+                                 const std::string& name, const std::vector<Piece>& pieces) {
+  // Pieces repeating faster than two control periods cannot be driven as drawn (at limits
+  // of 10^9 rad/s, loops of a micrometre once made tens of millions of control samples).
+  double cycle_s = 0.0;
+  for (const Piece& piece : pieces) cycle_s += piece.seconds;
+  if (!(cycle_s >= 2.0 / o.control_rate_hz)) return std::nullopt;
   Motion m;
   m.name = name;
   m.controls = ControlSignal(sys.num_controls(), 0);

@@ -105,5 +105,23 @@ TEST(UsualMotions, SizesStartAtTheRobotsScaleOnALargeFloor) {
   EXPECT_LE(large, 1.2 * small);
 }
 
+// Wheel limits of 10^9 rad/s (a typo, or a unit mixed up) once had loops a micrometre
+// across drawn as pieces shorter than a control period: tens of millions of samples,
+// 17 GB and minutes. Every motion now has about the samples its duration holds (a piece's
+// or a run's edges add one each: the thesis's 99 runs, 298 for 200 periods).
+TEST(UsualMotions, AbsurdLimitsGiveNoMoreSamplesThanTheDurationHolds) {
+  const System sys = MakeSystem("diffdrive").value();
+  const Eigen::Vector3d p(0.033, 0.033, 0.3);
+  const Eigen::Matrix3d prior = Eigen::Vector3d(3e-6, 3e-6, 1e-4).asDiagonal();
+  PlanOptions o;
+  o.duration_s = 10.0;
+  o.max_abs = {1e9, 1e9};
+  const auto ws = MakeArena(-1.0, -1.0, 1.0, 1.0);
+  const std::vector<Motion> all = UsualMotions(sys, p, prior, *ws, o);
+  EXPECT_FALSE(all.empty());
+  const double most = 2.0 * o.duration_s * o.control_rate_hz;
+  for (const Motion& m : all) EXPECT_LE(static_cast<double>(m.controls.size()), most) << m.name;
+}
+
 }  // namespace
 }  // namespace kincal
