@@ -6,16 +6,18 @@
 #include <algorithm>
 #include <array>
 #include <charconv>
-#include <cmath>
 #include <filesystem>
 #include <set>
 #include <stdexcept>
 
+#include "daemon/config_names.h"
 #include "kincal/finite.h"
 #include "kincal/text.h"
 
 namespace kincal::daemon {
 namespace {
+
+using namespace config_internal;  // NOLINT: the choices' names, kept beside this file
 
 // A config file that cannot be read (file:line and the key); thrown by the loaders below
 // and caught in ReadDaemonConfig, never outside this file.
@@ -23,47 +25,6 @@ class ConfigError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-
-template <typename E>
-struct Named {
-  std::string_view name;
-  E value;
-};
-constexpr std::array<Named<SourceKind>, 4> kSourceNames{{{"sim", SourceKind::kSim},
-                                                         {"v4l2", SourceKind::kV4l2},
-                                                         {"libcamera", SourceKind::kLibcamera},
-                                                         {"replay", SourceKind::kReplay}}};
-constexpr std::array<Named<PoseMethod>, 2> kPoseMethodNames{
-    {{"ground_plane", PoseMethod::kGroundPlane}, {"lowe", PoseMethod::kLowe}}};
-constexpr std::array<Named<ControlStamp>, 3> kControlStampNames{
-    {{"receive", ControlStamp::kReceive},
-     {"sender", ControlStamp::kSender},
-     {"mapped", ControlStamp::kMapped}}};
-constexpr std::array<Named<FrameEncoding>, 3> kFrameEncodingNames{
-    {{"raw", FrameEncoding::kRaw}, {"png", FrameEncoding::kPng}, {"jpeg", FrameEncoding::kJpeg}}};
-// Pixel formats a camera can be asked for (PNG is only a recorded frame's encoding).
-constexpr std::array<Named<PixelFormat>, 5> kCameraFormatNames{{{"GREY", PixelFormat::kGrey},
-                                                                {"YUYV", PixelFormat::kYuyv},
-                                                                {"MJPG", PixelFormat::kMjpeg},
-                                                                {"BGR3", PixelFormat::kBgr24},
-                                                                {"RGB3", PixelFormat::kRgb24}}};
-
-template <typename E, size_t N>
-std::string_view NameOf(const std::array<Named<E>, N>& table, E value) {
-  for (const auto& n : table) {
-    if (n.value == value) return n.name;
-  }
-  return "?";
-}
-
-template <typename E, size_t N>
-std::string NameList(const std::array<Named<E>, N>& table) {
-  std::string list;
-  for (size_t i = 0; i < N; ++i) {
-    list += (i == 0 ? "" : (i + 1 == N ? " or " : ", ")) + std::string(table[i].name);
-  }
-  return list;
-}
 
 // One YAML map: typed reads that name file:line on error, and a check that every key in
 // the file was one we know.
