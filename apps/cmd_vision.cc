@@ -42,13 +42,7 @@ Status WriteImage(const std::string& path, const cv::Mat& image) {
 // The camera `kincal render` draws with: the intrinsics file's, else 640x480 at f = 820 px.
 StatusOr<vision::CameraModel> RenderCamera(const std::string& intrinsics) {
   if (!intrinsics.empty()) return vision::ReadCameraYaml(intrinsics);
-  vision::CameraModel cam;
-  cam.width = 640;
-  cam.height = 480;
-  cam.fx = cam.fy = 820;
-  cam.cx = 319.5;
-  cam.cy = 239.5;
-  return cam;
+  return vision::CameraModel::Centred(640, 480, 820.0);
 }
 
 }  // namespace

@@ -124,12 +124,8 @@ FormatRecording RecordFormat(int width, int height, FrameEncoding encoding) {
                            std::to_string(width) + "_" + std::string(FrameEncodingName(encoding));
   DaemonConfig c = Base();
   if (width != 640 || height != 480) {
-    vision::CameraModel cam;
-    cam.width = width;
-    cam.height = height;
-    cam.fx = cam.fy = 500.0 * width / 640.0;
-    cam.cx = 0.5 * (width - 1);
-    cam.cy = 0.5 * (height - 1);
+    const vision::CameraModel cam =
+        vision::CameraModel::Centred(width, height, 500.0 * width / 640.0);
     c.camera.intrinsics = (dir / (stem + ".yaml")).string();
     if (!vision::WriteCameraYaml(cam, c.camera.intrinsics).ok()) return {};
   }

@@ -39,12 +39,7 @@ const Recorded& Recording1280() {
     DaemonConfig& c = out.config;
     c = ReadDaemonConfig(std::string(KINCAL_SOURCE_DIR) + "/config/kincald_sim.yaml").value();
     c.lcm.url = "memq://";
-    vision::CameraModel cam;
-    cam.width = 1280;
-    cam.height = 960;
-    cam.fx = cam.fy = 1000.0;
-    cam.cx = 639.5;
-    cam.cy = 479.5;
+    const vision::CameraModel cam = vision::CameraModel::Centred(1280, 960, 1000.0);
     c.camera.intrinsics = (dir / (stem + ".yaml")).string();
     if (!vision::WriteCameraYaml(cam, c.camera.intrinsics).ok()) return out;
     c.sim.speed = 0;

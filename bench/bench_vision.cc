@@ -28,11 +28,7 @@ struct Scene {
 
 Scene MakeScene(int width, int height) {
   Scene s;
-  s.cam.width = width;
-  s.cam.height = height;
-  s.cam.fx = s.cam.fy = 820.0 * width / 640.0;
-  s.cam.cx = 0.5 * (width - 1);
-  s.cam.cy = 0.5 * (height - 1);
+  s.cam = CameraModel::Centred(width, height, 820.0 * width / 640.0);
   s.cam.k1 = -0.1;
   const Eigen::Matrix3d R_cf = Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitX()).toRotationMatrix();
   s.truth.R = R_cf * Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()).toRotationMatrix();

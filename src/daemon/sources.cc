@@ -66,11 +66,7 @@ StatusOr<std::unique_ptr<FrameSource>> MakeSource(const DaemonConfig& c, const V
 StatusOr<VisionSetup> LoadVisionSetup(const DaemonConfig& c) {
   VisionSetup v;
   if (c.camera.intrinsics.empty()) {
-    v.camera.width = 640;
-    v.camera.height = 480;
-    v.camera.fx = v.camera.fy = 500.0;
-    v.camera.cx = 319.5;
-    v.camera.cy = 239.5;
+    v.camera = vision::CameraModel::Centred(640, 480, 500.0);
   } else {
     StatusOr<vision::CameraModel> camera = vision::ReadCameraYaml(c.camera.intrinsics);
     if (!camera.ok()) return camera.status();

@@ -61,6 +61,16 @@ Eigen::Vector2d CameraModel::PixelToNormalized(const Eigen::Vector2d& px) const 
   return n;
 }
 
+CameraModel CameraModel::Centred(int width, int height, double focal_px) {
+  CameraModel c;
+  c.width = width;
+  c.height = height;
+  c.fx = c.fy = focal_px;
+  c.cx = 0.5 * (width - 1);
+  c.cy = 0.5 * (height - 1);
+  return c;
+}
+
 bool CameraModel::IsValid(std::string* error) const {
   if (width <= 0 || height <= 0 || !(fx > 0) || !(fy > 0)) {
     *error = "camera needs positive image size and focal lengths";

@@ -320,12 +320,7 @@ TEST(Plan, UnicycleWithALagAndATricycle) {
 // the shipped simulated camera (640x480, f 500 px, 2 m up), markers 10 px inside.
 TEST(Plan, EveryRobotWithinThePriorStaysInView) {
   PlanCase c = PlanReference(20.0);
-  vision::CameraModel cam;
-  cam.width = 640;
-  cam.height = 480;
-  cam.fx = cam.fy = 500.0;
-  cam.cx = 319.5;
-  cam.cy = 239.5;
+  const vision::CameraModel cam = vision::CameraModel::Centred(640, 480, 500.0);
   const auto ws =
       MakeCameraView(cam, vision::NadirFloor(2.0), vision::TargetLayout::Thesis(), 0.1, 10.0);
   const Eigen::MatrixXd prior = c.prior_sigma.cwiseAbs2().asDiagonal();

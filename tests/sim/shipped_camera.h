@@ -13,11 +13,7 @@ namespace kincal::test_util {
 
 inline ThesisVision ShippedCamera() {
   ThesisVision v;
-  v.camera.width = 640;
-  v.camera.height = 480;
-  v.camera.fx = v.camera.fy = 500.0;
-  v.camera.cx = 319.5;
-  v.camera.cy = 239.5;
+  v.camera = vision::CameraModel::Centred(640, 480, 500.0);
   v.floor = vision::NadirFloor(2.0);
   v.layout =
       vision::ReadTargetLayoutYaml(::kincal::testing::SourceDir() + "/config/target_large.yaml")

@@ -63,6 +63,23 @@ TEST(Camera, OpenCvYamlRoundTripAndErrors) {
       << refused.status().message();
 }
 
+// The default camera of kincald and `kincal render`: the principal point at the centre of
+// the pixel grid (pixel centres at integers: 319.5 of 0..639).
+TEST(Camera, CentredHasItsPrincipalPointAtTheImageCentre) {
+  const CameraModel c = CameraModel::Centred(640, 480, 500.0);
+  EXPECT_EQ(c.width, 640);
+  EXPECT_EQ(c.height, 480);
+  EXPECT_EQ(c.fx, 500.0);
+  EXPECT_EQ(c.fy, 500.0);
+  EXPECT_EQ(c.cx, 319.5);
+  EXPECT_EQ(c.cy, 239.5);
+  EXPECT_EQ(c.k1, 0.0);
+  const Eigen::Vector2d centre = c.Project(Eigen::Vector3d(0.0, 0.0, 2.0));
+  EXPECT_EQ(centre, Eigen::Vector2d(319.5, 239.5));
+  std::string error;
+  EXPECT_TRUE(c.IsValid(&error)) << error;
+}
+
 // A camera whose numbers cannot be projected with, or whose frame could not be allocated: an
 // infinite distortion once rendered centres at (-inf, -inf), and a width of 99999999 px
 // asked OpenCV for 192 GB.

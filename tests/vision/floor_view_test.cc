@@ -9,15 +9,7 @@
 namespace kincal::vision {
 namespace {
 
-CameraModel Camera640() {
-  CameraModel c;
-  c.width = 640;
-  c.height = 480;
-  c.fx = c.fy = 500.0;
-  c.cx = 319.5;
-  c.cy = 239.5;
-  return c;
-}
+CameraModel Camera640() { return CameraModel::Centred(640, 480, 500.0); }
 
 // Straight down from `h` m above the floor (camera x along floor x, y along -y).
 FloorExtrinsics Nadir(double h) {

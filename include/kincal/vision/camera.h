@@ -32,6 +32,9 @@ struct CameraModel {
   Eigen::Vector2d PixelToNormalized(const Eigen::Vector2d& px) const;
   // Image size 1..kMaxCameraSide a side, focal lengths > 0, every number finite.
   bool IsValid(std::string* error) const;
+  // No distortion, square pixels of `focal_px`, the principal point at the image's centre
+  // ((width - 1) / 2, (height - 1) / 2): the default and the simulated cameras.
+  static CameraModel Centred(int width, int height, double focal_px);
 };
 
 // OpenCV FileStorage YAML: camera_matrix, distortion_coefficients, image_width,
