@@ -12,6 +12,7 @@
 
 #include "kincal/daemon/command_line.h"
 #include "kincal/daemon/daemon.h"
+#include "options.h"
 
 #ifndef KINCAL_INSTALL_DATADIR
 #define KINCAL_INSTALL_DATADIR ""
@@ -56,7 +57,7 @@ void AddOptions(CLI::App* app, std::string* config, kincal::daemon::CommandLineO
       app->add_flag("--fast", o->fast, "as fast as possible, nothing dropped, deterministic");
   sp->excludes(fa);
   app->add_option("--loop", o->loops, "replay the log N times, each later by its span (soak tests)")
-      ->check(CLI::PositiveNumber);
+      ->check(kincal::app::AtLeastOne());
   app->add_option("--record", o->record,
                   "write everything (frames, controls, outputs) to this LCM log");
   app->add_flag("--record-png", o->record_png, "store recorded frames as PNG instead of raw");
@@ -143,6 +144,7 @@ int main(int argc, char** argv) {
   kincal::daemon::CommandLineOptions options;
   bool quiet = false, config_keys = false;
   AddOptions(&app, &config, &options, &quiet, &config_keys);
+  kincal::app::RefuseNonFiniteNumbers(app);
   CLI11_PARSE(app, argc, argv);
   if (config_keys) {
     PrintConfigKeys();

@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace kincal::app {
 namespace {
@@ -31,11 +32,17 @@ CLI::Validator AboveZero() {
   return NumberCheck([](double v) { return v > 0; }, "a number > 0");
 }
 
+CLI::Validator AtLeastOne() {
+  return NumberCheck([](double v) { return v >= 1; }, "a number >= 1");
+}
+
 void RefuseNonFiniteNumbers(CLI::App& app) {
   const CLI::Validator finite =
       NumberCheck([](double v) { return std::isfinite(v); }, "a finite number");
-  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
-    for (CLI::Option* opt : sub->get_options()) {
+  std::vector<CLI::App*> apps = app.get_subcommands([](CLI::App*) { return true; });
+  apps.push_back(&app);
+  for (CLI::App* a : apps) {
+    for (CLI::Option* opt : a->get_options()) {
       if (opt->get_type_name() == "FLOAT") opt->check(finite);
     }
   }

@@ -1,5 +1,5 @@
-// Checks on the `kincal` commands' options that say in words what was expected (CLI11's
-// own range checks print the type's limits in full).
+// Checks on the options of `kincal`'s commands and of `kincald` that say in words what
+// was expected (CLI11's own range checks print the type's limits in full).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -10,8 +10,10 @@ namespace kincal::app {
 CLI::Validator AtLeastZero();
 // A number > 0.
 CLI::Validator AboveZero();
-// Adds to every floating-point option of every command of `app` a check that refuses nan,
-// inf and 1e999 by the option's name, before a command runs.
+// A number >= 1 (a count of runs, loops).
+CLI::Validator AtLeastOne();
+// Adds to every floating-point option of `app` and of each of its commands a check that
+// refuses nan, inf and 1e999 by the option's name, before a command runs.
 void RefuseNonFiniteNumbers(CLI::App& app);
 
 }  // namespace kincal::app

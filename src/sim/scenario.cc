@@ -21,10 +21,13 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The value of `key` in the map `n` (the section `section`, "" at the top), or `fallback`.
 template <typename T>
-T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std::string& file) {
+T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std::string& file,
+      const std::string& section = "") {
   if (!n[key]) return fallback;
-  const std::string where = file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" + key;
+  const std::string where = file + ":" + std::to_string(n[key].Mark().line + 1) + ": key '" +
+                            (section.empty() ? key : section + "." + key);
   T value;
   try {
     value = n[key].as<T>();
@@ -33,6 +36,24 @@ T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std:
   }
   if (!AllFinite(value)) throw ScenarioError(where + "': finite numbers expected");
   return value;
+}
+
+// Refuses a key of the map `n` that is not in `known` (a typo would be ignored silently),
+// naming it with its section ("controls.lw"); `n` must be a map.
+void CheckKeys(const YAML::Node& n, const std::set<std::string>& known, const std::string& file,
+               const std::string& section) {
+  const std::string prefix = section.empty() ? "" : section + ".";
+  if (!n.IsMap()) {
+    throw ScenarioError(file + ":" + std::to_string(n.Mark().line + 1) + ": '" + section +
+                        "' must be a map of keys");
+  }
+  for (const auto& kv : n) {
+    const auto key = kv.first.as<std::string>();
+    if (!known.count(key)) {
+      throw ScenarioError(file + ":" + std::to_string(kv.first.Mark().line + 1) +
+                          ": unknown key '" + prefix + key + "'");
+    }
+  }
 }
 
 Scenario LoadScenarioOrThrow(const std::string& file) {
@@ -51,13 +72,7 @@ Scenario LoadScenarioOrThrow(const std::string& file) {
                                               "controls",       "camera",
                                               "filter",         "control_psd",
                                               "report_every_s"};
-  for (const auto& kv : root) {
-    const auto key = kv.first.as<std::string>();
-    if (!kKeys.count(key)) {
-      throw ScenarioError(file + ":" + std::to_string(kv.first.Mark().line + 1) +
-                          ": unknown key '" + key + "'");
-    }
-  }
+  CheckKeys(root, kKeys, file, "");
   Scenario s;
   s.model = Get(root, "model", s.model, file);
   s.truth = Get(root, "truth", s.truth, file);
@@ -71,18 +86,21 @@ Scenario LoadScenarioOrThrow(const std::string& file) {
   s.control_psd = Get(root, "control_psd", s.control_psd, file);
   s.report_every_s = Get(root, "report_every_s", s.report_every_s, file);
   if (const auto c = root["controls"]) {
-    s.profile = Get(c, "profile", s.profile, file);
-    s.control_low = Get(c, "low", s.control_low, file);
-    s.control_high = Get(c, "high", s.control_high, file);
-    s.min_period_s = Get(c, "min_period_s", s.min_period_s, file);
-    s.control_rate_hz = Get(c, "rate_hz", s.control_rate_hz, file);
+    CheckKeys(c, {"profile", "low", "high", "min_period_s", "rate_hz"}, file, "controls");
+    s.profile = Get(c, "profile", s.profile, file, "controls");
+    s.control_low = Get(c, "low", s.control_low, file, "controls");
+    s.control_high = Get(c, "high", s.control_high, file, "controls");
+    s.min_period_s = Get(c, "min_period_s", s.min_period_s, file, "controls");
+    s.control_rate_hz = Get(c, "rate_hz", s.control_rate_hz, file, "controls");
   }
   if (const auto c = root["camera"]) {
-    s.camera.rate_hz = Get(c, "rate_hz", s.camera.rate_hz, file);
-    s.camera.jitter_max_s = Get(c, "jitter_max_s", s.camera.jitter_max_s, file);
-    s.camera.jitter_prob = Get(c, "jitter_prob", s.camera.jitter_prob, file);
-    s.camera.dropout_prob = Get(c, "dropout_prob", s.camera.dropout_prob, file);
-    const auto sigma = Get(c, "pose_sigma", std::vector<double>{}, file);
+    CheckKeys(c, {"rate_hz", "jitter_max_s", "jitter_prob", "dropout_prob", "pose_sigma"}, file,
+              "camera");
+    s.camera.rate_hz = Get(c, "rate_hz", s.camera.rate_hz, file, "camera");
+    s.camera.jitter_max_s = Get(c, "jitter_max_s", s.camera.jitter_max_s, file, "camera");
+    s.camera.jitter_prob = Get(c, "jitter_prob", s.camera.jitter_prob, file, "camera");
+    s.camera.dropout_prob = Get(c, "dropout_prob", s.camera.dropout_prob, file, "camera");
+    const auto sigma = Get(c, "pose_sigma", std::vector<double>{}, file, "camera");
     if (!sigma.empty()) {
       if (sigma.size() != 3) throw ScenarioError(file + ": camera.pose_sigma needs 3 values");
       s.pose_sigma = Eigen::Vector3d(sigma[0], sigma[1], sigma[2]);

@@ -34,6 +34,23 @@ TEST(Scenario, UnknownKeyIsNamedWithFileAndLine) {
   EXPECT_NE(e.find("bad_scenario.yaml:3: unknown key 'wheel_radius'"), std::string::npos) << e;
 }
 
+// A misspelt key inside a section was ignored and the run used the default: "lw" for
+// "low" simulated the default controls with exit 0.
+TEST(Scenario, UnknownKeyInASectionIsNamedWithItsSection) {
+  const auto path = std::filesystem::temp_directory_path() / "kincal_scenario_section.yaml";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"controls: {lw: [0.1, -1], high: [0.5, 1]}\n", ":3: unknown key 'controls.lw'"},
+      {"camera:\n  rate_hz: 30\n  dropout: 0.1\n", ":5: unknown key 'camera.dropout'"},
+      {"controls: [0.1, 0.5]\n", ":3: 'controls' must be a map of keys"},
+  };
+  for (const auto& [body, expected] : cases) {
+    std::ofstream(path) << "model: unicycle\nduration_s: 2\n" << body;
+    const std::string e = ScenarioLoadError(path.string());
+    EXPECT_NE(e.find(expected), std::string::npos) << body << " -> " << e;
+  }
+  std::filesystem::remove(path);
+}
+
 TEST(Scenario, NegativeDurationIsRejected) {
   const auto path = std::filesystem::temp_directory_path() / "kincal_scenario_duration.yaml";
   std::ofstream(path) << "model: unicycle\nduration_s: -5\n";
@@ -51,14 +68,15 @@ TEST(Scenario, NumbersThatCannotBeSimulatedAreNamed) {
       {"truth: {k_v: .nan, k_omega: 1}\n", ":3: key 'truth': finite numbers expected"},
       {"guess: {k_v: .inf}\n", ":3: key 'guess': finite numbers expected"},
       {"report_every_s: .inf\n", ":3: key 'report_every_s': finite numbers expected"},
-      {"controls: {low: [.nan, -1], high: [0.5, 1]}\n", ": key 'low': finite numbers expected"},
+      {"controls: {low: [.nan, -1], high: [0.5, 1]}\n",
+       ":3: key 'controls.low': finite numbers expected"},
       {"controls: {low: [0.5, -1], high: [0.1, 1]}\n",
        ": controls.low must not exceed controls.high, channel by channel"},
       {"controls: {low: [0.1], high: [0.5, 1]}\n",
        ": controls.low and controls.high need as many values"},
       {"controls: {rate_hz: 0}\n", ": controls.min_period_s must be > 0 and controls.rate_hz"},
       {"controls: {min_period_s: -1}\n", ": controls.min_period_s must be > 0"},
-      {"camera: {jitter_max_s: .inf}\n", ":3: key 'jitter_max_s': finite numbers expected"},
+      {"camera: {jitter_max_s: .inf}\n", ":3: key 'camera.jitter_max_s': finite numbers expected"},
   };
   for (const auto& [body, expected] : cases) {
     std::ofstream(path) << head << body;
