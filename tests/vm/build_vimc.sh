@@ -15,10 +15,23 @@ for tool in make gcc apt-get dpkg-deb xz tar; do
   command -v "$tool" >/dev/null || die "missing $tool (scripts/setup installs build-essential xz-utils)"
 done
 series=${version%%.*}.$(echo "$version" | cut -d. -f2)  # 6.1.192-2 -> 6.1
+# PKG=VERSION, or, when the archive no longer has that exact version, its newest of the same
+# upstream version (6.1.192-*): Debian keeps only the newest linux-kbuild and linux-source
+# of a release, and a new Debian revision of them (6.1.192-3) can come out while the kernel
+# image is still 6.1.192-2. Same upstream version, same driver source and tools; the
+# vermagic check below still holds the module to the kernel.
+pick() {
+  local pkg=$1 have
+  have=$(apt-cache madison "$pkg" 2>/dev/null | awk -F'|' '{gsub(/ /, "", $2); print $2}')
+  if grep -qxF "$version" <<<"$have"; then echo "$pkg=$version"; return; fi
+  local same
+  same=$(awk -v p="${version%-*}-" 'index($0, p) == 1' <<<"$have" | sort -V | tail -1)
+  echo "$pkg=${same:-$version}"
+}
 work=$cache/vimc/work
 rm -rf "$work" && mkdir -p "$work"
-pkgs=("linux-source-$series=$version" "linux-headers-$kver=$version"
-      "linux-headers-${kver%-*}-common=$version" "linux-kbuild-$series=$version")
+pkgs=("$(pick "linux-source-$series")" "$(pick "linux-headers-$kver")"
+      "$(pick "linux-headers-${kver%-*}-common")" "$(pick "linux-kbuild-$series")")
 (cd "$work" && apt-get download "${pkgs[@]}" >/dev/null 2>&1) ||
   die "apt-get download ${pkgs[*]} failed (apt-get update? the packages must match the VM's kernel $kver)"
 for deb in "$work"/linux-headers-*.deb "$work"/linux-kbuild-*.deb; do
