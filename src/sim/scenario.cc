@@ -39,13 +39,15 @@ T Get(const YAML::Node& n, const std::string& key, const T& fallback, const std:
 }
 
 // Refuses a key of the map `n` that is not in `known` (a typo would be ignored silently),
-// naming it with its section ("controls.lw"); `n` must be a map.
+// naming it with its section ("controls.lw"); `n` must be a map (or empty: the defaults).
 void CheckKeys(const YAML::Node& n, const std::set<std::string>& known, const std::string& file,
                const std::string& section) {
   const std::string prefix = section.empty() ? "" : section + ".";
+  if (n.IsNull()) return;
   if (!n.IsMap()) {
-    throw ScenarioError(file + ":" + std::to_string(n.Mark().line + 1) + ": '" + section +
-                        "' must be a map of keys");
+    throw ScenarioError(file + ":" + std::to_string(n.Mark().line + 1) + ": " +
+                        (section.empty() ? "a scenario" : "'" + section + "'") +
+                        " must be a map of keys");
   }
   for (const auto& kv : n) {
     const auto key = kv.first.as<std::string>();

@@ -4,6 +4,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <opencv2/core.hpp>
+#include <set>
 #include <stdexcept>
 
 #include "kincal/text.h"
@@ -24,6 +25,23 @@ class SetupFileError : public std::runtime_error {
 // Target layout YAML (config/target_*.yaml) -> TargetLayout; errors name file and line.
 namespace {
 
+// Refuses a layout that is not a map, or a key it does not know (a misspelt key would be
+// ignored and its default used).
+void CheckLayoutKeys(const YAML::Node& n, const std::string& path) {
+  if (!n.IsMap() && !n.IsNull()) throw SetupFileError(path + ": a target layout is a map of keys");
+  static const std::set<std::string> kKeys = {"name", "marker_radius_m", "dark_on_light",
+                                              "plate_size_m", "markers"};
+  for (const auto& kv : n) {
+    const auto key = kv.first.as<std::string>();
+    if (!kKeys.count(key)) {
+      throw SetupFileError(path + ":" + std::to_string(kv.first.Mark().line + 1) +
+                           ": unknown key '" + key +
+                           "' (known: name, marker_radius_m, dark_on_light, plate_size_m, "
+                           "markers)");
+    }
+  }
+}
+
 TargetLayout ReadTargetLayoutYamlOrThrow(const std::string& path) {
   if (path.empty()) return TargetLayout::Thesis();
   const StatusOr<std::string> text = ReadTextFile(path, "target layout");
@@ -34,6 +52,7 @@ TargetLayout ReadTargetLayoutYamlOrThrow(const std::string& path) {
   } catch (const YAML::Exception& e) {
     throw SetupFileError(path + ": " + e.what());
   }
+  CheckLayoutKeys(n, path);
   TargetLayout t;
   try {
     t.name = n["name"] ? n["name"].as<std::string>() : path;

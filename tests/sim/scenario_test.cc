@@ -48,6 +48,9 @@ TEST(Scenario, UnknownKeyInASectionIsNamedWithItsSection) {
     const std::string e = ScenarioLoadError(path.string());
     EXPECT_NE(e.find(expected), std::string::npos) << body << " -> " << e;
   }
+  std::ofstream(path) << "- model: unicycle\n";
+  const std::string list = ScenarioLoadError(path.string());
+  EXPECT_NE(list.find(":1: a scenario must be a map of keys"), std::string::npos) << list;
   std::filesystem::remove(path);
 }
 

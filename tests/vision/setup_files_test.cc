@@ -62,6 +62,15 @@ TEST(SetupFiles, ABadTargetIsRefusedWithItsPathAndLine) {
   EXPECT_NE(ErrorOf(ReadTargetLayoutYaml(not_number)).find(not_number + ":3:"), std::string::npos);
   const std::string plate = Write("plate.yaml", "plate_size_m: [0.1]\nmarkers: []\n");
   EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(plate)), plate + ": plate_size_m needs [width, height]");
+  // A misspelt key was ignored: the default radius (the thesis's 8 mm) corrected the
+  // perspective bias of larger markers' centres, with no word said.
+  const std::string typo = Write("typo.yaml", "name: x\nmarker_radius: 0.02\nmarkers: []\n");
+  EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(typo)),
+            typo +
+                ":2: unknown key 'marker_radius' (known: name, marker_radius_m, "
+                "dark_on_light, plate_size_m, markers)");
+  const std::string list = Write("list.yaml", "- [0.1, 0.2]\n");
+  EXPECT_EQ(ErrorOf(ReadTargetLayoutYaml(list)), list + ": a target layout is a map of keys");
 }
 
 TEST(SetupFiles, AFloorFileReadsBackAndANonRotationIsRefused) {
