@@ -52,9 +52,7 @@ StatusOr<std::vector<double>> ParseNumbers(const std::string& text, size_t n, co
 
 StatusOr<std::map<std::string, double>> ParseMap(const std::string& text, const char* what) {
   std::map<std::string, double> m;
-  if (const Status s = ParseInitList(text, &m); !s.ok()) {
-    return Status::Error(std::string(what) + ": " + s.message());
-  }
+  KINCAL_RETURN_IF_ERROR(ParseInitList(text, &m, what));
   return m;
 }
 
