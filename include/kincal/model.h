@@ -88,6 +88,12 @@ StatusOr<std::shared_ptr<const KinematicModel>> MakeModel(std::string_view name)
 // The parameters' names as a list for messages ("k_v, k_steer, steer_offset, wheelbase").
 std::string ParamNames(const std::vector<ParamInfo>& params);
 
+// Empty when `v` is a value the parameter `p` can take: finite, and at least its physical
+// bound (ParamInfo::min_value, which the batch fits hold); otherwise what is wrong, naming
+// the parameter ("'d' must be >= 1e-06 m (its physical bound), not 0"). For values from
+// outside: a guess, a held value, a simulated truth.
+std::string ParamValueProblem(const ParamInfo& p, double v);
+
 }  // namespace kincal
 
 // Ends a model's implementation file, after its anonymous namespace, inside namespace

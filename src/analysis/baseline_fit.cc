@@ -104,6 +104,8 @@ StatusOr<Eigen::VectorXd> InitialParams(const System& sys,
                            "' has no parameter '" + name +
                            "' (its parameters: " + ParamNames(sys.params()) + ")");
     }
+    const std::string problem = ParamValueProblem(sys.params()[static_cast<size_t>(i)], v);
+    if (!problem.empty()) return Status::Error("--init: " + problem);
     p[i] = v;
   }
   return p;
@@ -120,6 +122,8 @@ StatusOr<std::vector<int>> FixParams(const System& sys, const std::map<std::stri
       return Status::Error("--fix: model '" + std::string(model.name()) + "' has no parameter '" +
                            name + "' (its parameters: " + known + ")");
     }
+    const std::string problem = ParamValueProblem(model.params()[static_cast<size_t>(i)], v);
+    if (!problem.empty()) return Status::Error("--fix: " + problem);
     (*p0)[i] = v;
     idx.push_back(i);
   }

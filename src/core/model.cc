@@ -1,5 +1,7 @@
 #include "kincal/model.h"
 
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 namespace kincal {
@@ -39,6 +41,20 @@ std::string ParamNames(const std::vector<ParamInfo>& params) {
   std::string out;
   for (const auto& p : params) out += (out.empty() ? "" : ", ") + p.name;
   return out;
+}
+
+std::string ParamValueProblem(const ParamInfo& p, double v) {
+  const auto text = [](double x) {
+    std::ostringstream s;
+    s << x;
+    return s.str();
+  };
+  if (!std::isfinite(v)) return "'" + p.name + "' must be a finite number, not " + text(v);
+  if (v < p.min_value) {
+    return "'" + p.name + "' must be >= " + text(p.min_value) + " " + p.unit +
+           " (its physical bound), not " + text(v);
+  }
+  return "";
 }
 
 }  // namespace kincal

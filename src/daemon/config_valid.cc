@@ -135,12 +135,15 @@ bool RobotOptions::IsValid(std::string* error) const {
   }
   const std::string known = ParamNames(sys->model().params());
   for (const auto& [name, v] : fixed) {
-    if (!Expect(sys->model().ParamIndex(name) >= 0 && std::isfinite(v),
+    const int i = sys->model().ParamIndex(name);
+    if (!Expect(i >= 0,
                 "robot.fixed: '" + name + "' is not a parameter of model '" + model +
-                    "' with a finite value (its parameters: " + known + ")",
+                    "' (its parameters: " + known + ")",
                 error)) {
       return false;
     }
+    const std::string problem = ParamValueProblem(sys->model().params()[static_cast<size_t>(i)], v);
+    if (!Expect(problem.empty(), "robot.fixed: " + problem, error)) return false;
   }
   if (!Expect(fixed.empty() || static_cast<int>(fixed.size()) < sys->model().num_params(),
               "robot.fixed holds every parameter of model '" + model + "' (" + known +
@@ -149,13 +152,15 @@ bool RobotOptions::IsValid(std::string* error) const {
     return false;
   }
   for (const auto& [name, v] : guess) {
+    const int i = sys->ParamIndex(name);
     if (!Expect(
-            sys->ParamIndex(name) >= 0,
+            i >= 0,
             "robot.guess: model '" + model + "' with its effects has no parameter '" + name + "'",
-            error) ||
-        !Expect(std::isfinite(v), "robot.guess: '" + name + "' must be a finite number", error)) {
+            error)) {
       return false;
     }
+    const std::string problem = ParamValueProblem(sys->params()[static_cast<size_t>(i)], v);
+    if (!Expect(problem.empty(), "robot.guess: " + problem, error)) return false;
   }
   return true;
 }

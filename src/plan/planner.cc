@@ -181,11 +181,12 @@ Status HoldParameters(const System& sys, const std::map<std::string, double>& fi
   std::vector<bool> held(static_cast<size_t>(sys.num_params()), false);
   for (const auto& [name, v] : fixed) {
     const int i = model.ParamIndex(name);
-    if (i < 0 || !std::isfinite(v)) {
+    if (i < 0) {
       return Status::Error("fix: '" + name + "' is not a parameter of " +
-                           std::string(model.name()) +
-                           " with a finite value (its parameters: " + known + ")");
+                           std::string(model.name()) + " (its parameters: " + known + ")");
     }
+    const std::string problem = ParamValueProblem(model.params()[static_cast<size_t>(i)], v);
+    if (!problem.empty()) return Status::Error("fix: " + problem);
     (*params)[i] = v;
     SetSigmaAlone(i, kHeldSigmaFraction * sys.params()[static_cast<size_t>(i)].default_sigma,
                   prior_cov);

@@ -159,8 +159,8 @@ StatusOr<VecN<kMaxState>> ParamsFrom(const System& sys, const std::map<std::stri
   for (const auto& [name, v] : values) {
     const int i = sys.ParamIndex(name);
     if (i < 0) return Status::Error(what + ": unknown parameter '" + name + "'");
-    if (!std::isfinite(v))
-      return Status::Error(what + ": parameter '" + name + "': a finite number expected");
+    const std::string problem = ParamValueProblem(sys.params()[static_cast<size_t>(i)], v);
+    if (!problem.empty()) return Status::Error(what + ": " + problem);
     p[i] = v;
   }
   return p;

@@ -40,5 +40,18 @@ TEST(BaselineFit, UnknownInitialNamesAreErrors) {
   EXPECT_EQ(p[1], 0.7);
 }
 
+// A start or a held value below a parameter's physical bound (which the fits hold): --fix
+// d=0 once ended in "'r_l' is not identifiable" three times over, after a flood of Ceres
+// warnings.
+TEST(BaselineFit, ValuesBelowAPhysicalBoundAreErrors) {
+  const System sys = MakeSystem("diffdrive").value();
+  EXPECT_EQ(InitialParams(sys, {{"r_l", -0.03}}).status().message(),
+            "--init: 'r_l' must be >= 1e-06 m (its physical bound), not -0.03");
+  Eigen::VectorXd p0 = InitialParams(sys, {}).value();
+  EXPECT_EQ(FixParams(sys, {{"d", 0.0}}, &p0).status().message(),
+            "--fix: 'd' must be >= 1e-06 m (its physical bound), not 0");
+  EXPECT_TRUE(FixParams(sys, {{"d", 0.148}}, &p0).ok());
+}
+
 }  // namespace
 }  // namespace kincal::analysis

@@ -167,7 +167,7 @@ TEST(DaemonConfig, NonFiniteNumbersAndANegativeSpeedAreNamed) {
   EXPECT_EQ(LoadError(guess), guess + ":3: key 'robot.guess': finite numbers expected");
   DaemonConfig c;
   c.robot.guess["r_l"] = std::numeric_limits<double>::infinity();
-  EXPECT_EQ(ValidError(c), "robot.guess: 'r_l' must be a finite number");
+  EXPECT_EQ(ValidError(c), "robot.guess: 'r_l' must be a finite number, not inf");
   c = DaemonConfig{};
   c.source = SourceKind::kSim;
   c.sim.speed = -3;
@@ -196,6 +196,15 @@ TEST(DaemonConfig, RobotFixedIsReadAndChecked) {
   c.robot.fixed = {{"k_v", 1}, {"k_steer", 1}, {"steer_offset", 0}, {"wheelbase", 0.3}};
   EXPECT_FALSE(c.robot.IsValid(&error));
   EXPECT_NE(error.find("nothing is left to calibrate"), std::string::npos) << error;
+  // A held or guessed value below the parameter's physical bound: a held wheelbase of 0 (a
+  // held track of 0 on a diffdrive) ran to the end publishing NaN estimates.
+  c.robot.fixed = {{"wheelbase", 0.0}};
+  EXPECT_FALSE(c.robot.IsValid(&error));
+  EXPECT_EQ(error, "robot.fixed: 'wheelbase' must be >= 0.001 m (its physical bound), not 0");
+  c.robot.fixed = {};
+  c.robot.guess = {{"k_v", 1.0}, {"wheelbase", -0.33}};
+  EXPECT_FALSE(c.robot.IsValid(&error));
+  EXPECT_EQ(error, "robot.guess: 'wheelbase' must be >= 0.001 m (its physical bound), not -0.33");
 }
 
 // The loaders are the one list of the keys: each key DaemonConfigKeys lists, written alone

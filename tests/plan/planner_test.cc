@@ -119,6 +119,8 @@ TEST(Plan, HeldParametersAreKnownAndNotScored) {
                               {{"k_v", 1}, {"k_steer", 1}, {"steer_offset", 0}, {"wheelbase", 0.3}},
                               &p, &prior, &o)
                    .ok());
+  EXPECT_EQ(HoldParameters(sys, {{"wheelbase", 0.0}}, &p, &prior, &o).message(),
+            "fix: 'wheelbase' must be >= 0.001 m (its physical bound), not 0");
 }
 
 // --prior: the named parameters' sigma replaces the generic one (or the checkpoint's),

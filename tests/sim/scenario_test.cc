@@ -93,7 +93,15 @@ TEST(Scenario, NumbersThatCannotBeSimulatedAreNamed) {
   const System sys = MakeSystem("unicycle").value();
   const auto nan = ParamsFrom(sys, {{"k_v", std::nan("")}}, "--init");
   ASSERT_FALSE(nan.ok());
-  EXPECT_EQ(nan.status().message(), "--init: parameter 'k_v': a finite number expected");
+  EXPECT_EQ(nan.status().message(), "--init: 'k_v' must be a finite number, not nan");
+  // Below a parameter's physical bound (which the batch fits hold): a wheel of radius 0
+  // was planned for, and a held track of 0 made kincald publish NaN estimates.
+  const System diff = MakeSystem("diffdrive", {"actuator_lag"}).value();
+  EXPECT_EQ(ParamsFrom(diff, {{"d", 0.0}}, "--init").status().message(),
+            "--init: 'd' must be >= 1e-06 m (its physical bound), not 0");
+  EXPECT_EQ(ParamsFrom(diff, {{"tau_s", -0.01}}, "truth").status().message(),
+            "truth: 'tau_s' must be >= 0 s (its physical bound), not -0.01");
+  EXPECT_TRUE(ParamsFrom(diff, {{"tau_s", 0.0}, {"r_l", 1e-6}}, "truth").ok());
 }
 
 TEST(Scenario, ParamsByNameOverTheModelsDefaults) {
