@@ -224,6 +224,22 @@ bool Dataset::HeldOutAt(double t_s) const {
 
 namespace {
 
+// Why there are too few fit windows. Poses farther apart than a horizon are most often a
+// time column in milliseconds (or nanoseconds, for a recording of a few seconds).
+std::string FewFitWindows(const Recording& rec, const Dataset& d) {
+  if (d.pose_interval > d.horizon) {
+    std::ostringstream m;
+    m << rec.source << ": the poses are " << d.pose_interval
+      << " s apart (the median), more than the horizon of " << d.horizon
+      << " s: is 't' in seconds? (times in milliseconds or nanoseconds look like this; "
+         "otherwise raise --horizon)";
+    return m.str();
+  }
+  return rec.source +
+         ": fewer than 5 prediction windows in the fit part (gaps, or a recording shorter than a "
+         "few horizons)";
+}
+
 Dataset PrepareOrThrow(const Recording& rec, const AnalyzeOptions& o,
                        std::vector<std::string>* warnings) {
   Dataset d;
@@ -264,10 +280,7 @@ Dataset PrepareOrThrow(const Recording& rec, const AnalyzeOptions& o,
                               kShortWindowIntervals * d.pose_interval});
   d.short_windows =
       NonOverlapping(d, hs, t0, d.t_split, std::min(kMaxShortWindows, o.max_fit_windows));
-  if (d.fit_windows.size() < 5)
-    throw DataError(rec.source +
-                    ": fewer than 5 prediction windows in the fit part (gaps, or a recording "
-                    "shorter than a few horizons)");
+  if (d.fit_windows.size() < 5) throw DataError(FewFitWindows(rec, d));
   int held = 0;
   for (const auto& w : d.eval) held += d.HeldOutAt(d.t[static_cast<size_t>(w.start)]);
   if (held < 5)

@@ -253,7 +253,8 @@ void CheckRanges(const std::vector<Row>& rows, const std::string& path,
                  const std::vector<std::string>& names, const std::vector<double>& limits,
                  const std::vector<const char*>& expected) {
   for (const Row& r : rows) {
-    CheckRange(r, path, "t", r.t, kMaxAbsTimeS, "seconds");
+    CheckRange(r, path, "t", r.t, kMaxAbsTimeS,
+               "seconds; a time in milliseconds or nanoseconds is this large");
     for (size_t i = 0; i < names.size() && i < r.v.size(); ++i)
       CheckRange(r, path, names[i], r.v[i], limits[i], expected[i]);
   }

@@ -115,5 +115,25 @@ TEST(Windows, ATooShortRecordingIsAnErrorNamingIt) {
       << d.status().message();
 }
 
+// Times written in milliseconds: the recording spans 100,000 "s" with poses 100 "s"
+// apart, and the error blamed gaps or a short recording.
+TEST(Windows, PosesFartherApartThanAHorizonAskWhetherTimeIsInSeconds) {
+  const Recording ms = Circle(0.002, 0.004);
+  Recording rec = ms;
+  rec.controls = ControlSignal(2, 0);
+  for (int k = 0; k < static_cast<int>(ms.controls.size()); ++k) {
+    const auto& u = ms.controls.ValuesAt(k);
+    rec.controls.Append(SecondsToNs(1000 * ms.controls.TimeAt(k)), std::span(u.data(), 2));
+  }
+  for (auto& p : rec.poses) p.t_ns *= 1000;
+  std::vector<std::string> warnings;
+  const StatusOr<Dataset> d = Prepare(rec, Options(), &warnings);
+  ASSERT_FALSE(d.ok()) << "expected an error";
+  EXPECT_NE(d.status().message().find("synthetic: the poses are 100 s apart (the median), more "
+                                      "than the horizon of 1 s: is 't' in seconds?"),
+            std::string::npos)
+      << d.status().message();
+}
+
 }  // namespace
 }  // namespace kincal::analysis

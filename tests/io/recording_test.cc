@@ -96,7 +96,8 @@ TEST_F(RecordingCsv, ImplausibleValuesNameTheirColumnAndUnit) {
                 .find("c.csv:2: column 'v': 5000 is beyond +-1000 (m/s)"),
             std::string::npos);
   EXPECT_NE(Error("t,v,omega\n0,1,0\n1e300,1,0\n", kPoses)
-                .find("c.csv:3: column 't': 1e+300 is beyond +-10000000000 (seconds)"),
+                .find("c.csv:3: column 't': 1e+300 is beyond +-10000000000 (seconds; a time in "
+                      "milliseconds or nanoseconds is this large)"),
             std::string::npos);
   EXPECT_NE(Error("t,v,omega\n0,1,0\n2,1,0\n", "t,x,y,theta\n0,0,0,0\n1,2e9,0,0\n")
                 .find("p.csv:3: column 'x': 2000000000 is beyond +-1000000 (metres)"),
