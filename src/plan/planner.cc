@@ -5,6 +5,7 @@
 #include <future>
 #include <numeric>
 #include <optional>
+#include <sstream>
 #include <utility>
 
 #include "kincal/angles.h"
@@ -327,9 +328,11 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma, left, false, &d);
   }
   if (!ok) {
+    std::ostringstream when;
+    if (d.t_s > 0.0) when << " after " << d.t_s << " s";
     return Status::Error("plan: no control keeps every robot within the prior inside the " +
-                         ws.Describe() + " after " + std::to_string(d.t_s) +
-                         " s; widen the workspace or lower the speed limits");
+                         ws.Describe() + (d.t_s > 0.0 ? when.str() : " from the start") +
+                         "; widen the workspace or lower the speed limits");
   }
   plan->name = "plan";
   plan->controls = std::move(d.u);
