@@ -6,7 +6,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <functional>
 #include <kincal/calibration_t.hpp>
 #include <kincal/health_t.hpp>
 #include <kincal/model_check_t.hpp>
@@ -31,7 +30,6 @@
 #include "daemon/pose_stage.h"
 #include "daemon/publisher.h"
 #include "daemon/sources.h"
-#include "kincal/sim/scenario.h"
 #include "kincal/system.h"
 
 namespace kincal::daemon {
@@ -382,12 +380,9 @@ int Daemon::Run() {
   std::thread filter = guarded("filter", &Impl::FilterLoop);
   const bool subscribe = !d.caps.carries_controls;
   std::thread lcm_thread([&d, subscribe] {
-    while (!d.filter_done.load()) {
-      if (subscribe) {
-        d.out.lcm()->handleTimeout(50);
-      } else {
+    while (!d.filter_done.load()) {  // a failed handle waits too, rather than spin
+      if (!subscribe || d.out.lcm()->handleTimeout(50) < 0)
         std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      }
     }
   });
   const auto period = std::chrono::duration<double>(1.0 / d.cfg.health_rate_hz);
@@ -419,13 +414,17 @@ int Daemon::Run() {
   d.source->Stop();
   d.PublishHealth(period.count());
   d.out.CloseLog();
-  spdlog::info("kincald: {}", SummaryLine(counters()));
+  EndOfRun end;
+  end.checkpoint_path = d.cfg.checkpoint.path;
+  end.last_reject = d.intake.last_reject();
+  end.source_ended = d.source_done.load() && !stopping;
+  end.counters = counters();
+  spdlog::info("kincald: {}", SummaryLine(end.counters));
   std::lock_guard lock(d.status_mu);
-  if (!d.checkpoint_error.empty()) {
-    spdlog::error("kincald: the final checkpoint was not written: {}", d.checkpoint_error);
-    return 1;
-  }
-  return d.source_error.empty() ? 0 : 1;
+  end.checkpoint_error = d.checkpoint_error;
+  end.source_error = d.source_error;
+  end.has_estimate = !d.CalibrationLocked().names.empty();
+  return EndOfRunCode(end);
 }
 
 Checkpoint Daemon::Estimate() const {

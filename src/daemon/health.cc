@@ -133,4 +133,35 @@ bool HealthReporter::Log(const std::string& message, TimeNs now_mono_ns) {
   return !message.empty() || cleared;
 }
 
+namespace {
+
+// Why there is no estimate: the filter never started.
+std::string NeverStarted(const EndOfRun& e) {
+  const DaemonCounters& c = e.counters;
+  return fmt::format(
+      "the filter never started ({} valid poses; {} control messages accepted, {} rejected{})",
+      c.poses_valid, c.controls_received, c.messages_rejected,
+      e.last_reject.empty() ? "" : ", the last: " + e.last_reject);
+}
+
+}  // namespace
+
+std::string EndOfRunError(const EndOfRun& e) {
+  if (!e.checkpoint_error.empty())
+    return "the final checkpoint was not written: " + e.checkpoint_error;
+  if (e.has_estimate || !e.source_ended) return "";
+  return "the run ended without an estimate" +
+         (e.checkpoint_path.empty() ? "" : " (" + e.checkpoint_path + " not written)") + ": " +
+         NeverStarted(e);
+}
+
+int EndOfRunCode(const EndOfRun& e) {
+  const std::string error = EndOfRunError(e);
+  if (!error.empty()) spdlog::error("kincald: {}", error);
+  if (error.empty() && !e.has_estimate && !e.checkpoint_path.empty())
+    spdlog::warn("kincald: stopped with no estimate: {} not written: {}", e.checkpoint_path,
+                 NeverStarted(e));
+  return error.empty() && e.source_error.empty() ? 0 : 1;
+}
+
 }  // namespace kincal::daemon

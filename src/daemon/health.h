@@ -31,6 +31,25 @@ struct HealthStatus {
 // The whole run in one line (the daemon logs it when it stops).
 std::string SummaryLine(const DaemonCounters& c);
 
+// How a run ended, for its exit code.
+struct EndOfRun {
+  std::string checkpoint_path;   // --checkpoint ("" when none was asked for)
+  std::string checkpoint_error;  // the last checkpoint write's failure
+  std::string source_error;      // the source's failure
+  std::string last_reject;       // the newest control message rejected
+  bool has_estimate = false;     // the filter started (or resumed), or a batch calibrated
+  bool source_ended = false;     // a log or simulation ran out (not stopped by a signal)
+  DaemonCounters counters;
+};
+// What went wrong with the run's result ("" when nothing): a checkpoint write that failed,
+// or a log or simulation that ran to its end without an estimate, with why (poses,
+// controls accepted and rejected, the last rejection). A run stopped by a signal before the
+// filter started (a service stopped before the robot moved) is no error.
+std::string EndOfRunError(const EndOfRun& e);
+// 1, with EndOfRunError logged, when it is not empty or the source failed; else 0. A run
+// stopped before the filter started, with a checkpoint asked for, is said in a warning.
+int EndOfRunCode(const EndOfRun& e);
+
 class HealthReporter {
  public:
   // Silence on the camera longer than this is reported.

@@ -141,3 +141,37 @@ TEST(Health, AStandingAccountIsLoggedWhenItChangesAndAgainWhileItStands) {
 
 }  // namespace
 }  // namespace kincal::daemon
+
+namespace kincal::daemon {
+namespace {
+
+// A replay with the wrong model's config rejected every control, never started the
+// filter, wrote no checkpoint although --checkpoint asked for one, and exited 0.
+TEST(Health, ALogThatEndsWithoutAnEstimateFails) {
+  EndOfRun e;
+  e.counters.poses_valid = 151;
+  e.counters.messages_rejected = 251;
+  e.last_reject = "controls for model 'diffdrive', expected 'unicycle'";
+  e.checkpoint_path = "ck.json";
+  EXPECT_EQ(EndOfRunError(e), "") << "stopped by a signal before the robot moved";
+  EXPECT_EQ(EndOfRunCode(e), 0);
+  e.source_ended = true;
+  EXPECT_EQ(EndOfRunError(e),
+            "the run ended without an estimate (ck.json not written): the filter never started "
+            "(151 valid poses; 0 control messages accepted, 251 rejected, the last: controls for "
+            "model 'diffdrive', expected 'unicycle')");
+  EXPECT_EQ(EndOfRunCode(e), 1);
+  e.checkpoint_path.clear();
+  EXPECT_EQ(EndOfRunCode(e), 1) << "without --checkpoint too";
+  e.has_estimate = true;
+  EXPECT_EQ(EndOfRunCode(e), 0);
+  e.checkpoint_error = "ck.json: checkpoint not written: the estimate is not finite";
+  EXPECT_EQ(EndOfRunError(e), "the final checkpoint was not written: " + e.checkpoint_error);
+  EXPECT_EQ(EndOfRunCode(e), 1);
+  e.checkpoint_error.clear();
+  e.source_error = "replay: truncated";
+  EXPECT_EQ(EndOfRunCode(e), 1);
+}
+
+}  // namespace
+}  // namespace kincal::daemon
