@@ -149,7 +149,9 @@ std::string NeverStarted(const EndOfRun& e) {
 std::string EndOfRunError(const EndOfRun& e) {
   if (!e.checkpoint_error.empty())
     return "the final checkpoint was not written: " + e.checkpoint_error;
+  // A log of frames alone (no controls came, none asked for a checkpoint) gives poses only.
   if (e.has_estimate || !e.source_ended) return "";
+  if (e.checkpoint_path.empty() && e.counters.messages_rejected == 0) return "";
   return "the run ended without an estimate" +
          (e.checkpoint_path.empty() ? "" : " (" + e.checkpoint_path + " not written)") + ": " +
          NeverStarted(e);

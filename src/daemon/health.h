@@ -42,9 +42,11 @@ struct EndOfRun {
   DaemonCounters counters;
 };
 // What went wrong with the run's result ("" when nothing): a checkpoint write that failed,
-// or a log or simulation that ran to its end without an estimate, with why (poses,
-// controls accepted and rejected, the last rejection). A run stopped by a signal before the
-// filter started (a service stopped before the robot moved) is no error.
+// or a log or simulation that ran to its end without an estimate where a checkpoint was
+// asked for or control messages were rejected, with why (poses, controls accepted and
+// rejected, the last rejection). A log of frames alone (its poses are the product) and a run
+// stopped by a signal before the filter started (a service stopped before the robot moved)
+// are no error.
 std::string EndOfRunError(const EndOfRun& e);
 // 1, with EndOfRunError logged, when it is not empty or the source failed; else 0. A run
 // stopped before the filter started, with a checkpoint asked for, is said in a warning.

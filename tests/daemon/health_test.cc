@@ -163,6 +163,9 @@ TEST(Health, ALogThatEndsWithoutAnEstimateFails) {
   EXPECT_EQ(EndOfRunCode(e), 1);
   e.checkpoint_path.clear();
   EXPECT_EQ(EndOfRunCode(e), 1) << "without --checkpoint too";
+  e.counters.messages_rejected = 0;
+  EXPECT_EQ(EndOfRunCode(e), 0) << "a log of frames alone gives poses (VmVimc's replay)";
+  e.counters.messages_rejected = 251;
   e.has_estimate = true;
   EXPECT_EQ(EndOfRunCode(e), 0);
   e.checkpoint_error = "ck.json: checkpoint not written: the estimate is not finite";
