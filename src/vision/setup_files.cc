@@ -3,9 +3,11 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
+#include <array>
 #include <opencv2/core.hpp>
-#include <set>
 #include <stdexcept>
+#include <string_view>
 
 #include "kincal/text.h"
 #include "vision/opencv_file.h"
@@ -29,16 +31,15 @@ namespace {
 // ignored and its default used).
 void CheckLayoutKeys(const YAML::Node& n, const std::string& path) {
   if (!n.IsMap() && !n.IsNull()) throw SetupFileError(path + ": a target layout is a map of keys");
-  static const std::set<std::string> kKeys = {"name", "marker_radius_m", "dark_on_light",
-                                              "plate_size_m", "markers"};
+  constexpr std::array<std::string_view, 5> kKeys = {"name", "marker_radius_m", "dark_on_light",
+                                                     "plate_size_m", "markers"};
   for (const auto& kv : n) {
     const auto key = kv.first.as<std::string>();
-    if (!kKeys.count(key)) {
-      throw SetupFileError(path + ":" + std::to_string(kv.first.Mark().line + 1) +
-                           ": unknown key '" + key +
-                           "' (known: name, marker_radius_m, dark_on_light, plate_size_m, "
-                           "markers)");
-    }
+    if (std::find(kKeys.begin(), kKeys.end(), key) != kKeys.end()) continue;
+    std::string known;
+    for (const std::string_view k : kKeys) known += (known.empty() ? "" : ", ") + std::string(k);
+    throw SetupFileError(path + ":" + std::to_string(kv.first.Mark().line + 1) + ": unknown key '" +
+                         key + "' (known: " + known + ")");
   }
 }
 
