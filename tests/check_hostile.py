@@ -62,7 +62,7 @@ bad_inputs = [
     ("analyze --init k_v=nan", csv + ["--init", "k_v=nan"], "'nan' is not a finite number"),
     ("analyze --effects with a broken spec", csv + ["--effects", "dead_band[v"], "dead_band[v"),
     ("analyze a directory as controls", ["--controls", scratch, "--poses", f"{sim}/poses.csv"],
-     "is a directory, expected a text file"),
+     "cannot open recording file: Is a directory"),
     ("analyze /dev/zero as poses", ["--controls", f"{sim}/controls.csv", "--poses", "/dev/zero"],
      "line longer than 65536 bytes"),
 ]

@@ -1,17 +1,14 @@
 #include "kincal/io/recording.h"
 
-#include <sys/stat.h>
-
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <sstream>
 
 #include "kincal/angles.h"
+#include "kincal/csv.h"
 #include "kincal/text.h"
 
 namespace kincal {
@@ -60,67 +57,36 @@ std::string Trim(std::string s) {
 }
 
 std::vector<std::string> Split(const std::string& s, bool whitespace) {
+  if (!whitespace) return SplitCsvFields(s);
   std::vector<std::string> out;
-  if (whitespace) {
-    std::istringstream in(s);
-    std::string tok;
-    while (in >> tok) out.push_back(tok);
-  } else {
-    std::string cur;
-    for (char c : s) {
-      if (c == ',') {
-        out.push_back(Trim(cur));
-        cur.clear();
-      } else {
-        cur += c;
-      }
-    }
-    out.push_back(Trim(cur));
-  }
+  std::istringstream in(s);
+  std::string tok;
+  while (in >> tok) out.push_back(tok);
   return out;
 }
 
 double ParseNumber(const std::string& tok, const std::string& where, const std::string& what) {
   double v = 0.0;
-  const char* b = tok.data();
-  const char* e = tok.data() + tok.size();
-  auto [p, ec] = std::from_chars(b, e, v);
-  if (ec != std::errc() || p != e || !std::isfinite(v)) {
+  if (!ParseFiniteNumber(tok, &v)) {
     throw ReadError(where + ": " + what + ": expected a finite number, got '" + Escaped(tok) + "'");
   }
   return v;
 }
 
-std::ifstream Open(const std::string& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) {
-    throw ReadError(path + ": cannot open for reading: " + std::strerror(errno));
+// The lines of a text file; throws naming the file on what TextLines refuses.
+class Lines {
+ public:
+  explicit Lines(const std::string& path) : lines_(path, "recording file") {}
+  bool Next(std::string* line) {
+    if (lines_.Next(line)) return true;
+    if (!lines_.status().ok()) throw ReadError(lines_.status().message());
+    return false;
   }
-  if (S_ISDIR(st.st_mode)) throw ReadError(path + ": is a directory, expected a text file");
-  std::ifstream in(path);
-  if (!in) throw ReadError(path + ": cannot open for reading: " + std::strerror(errno));
-  return in;
-}
+  int number() const { return lines_.line_number(); }
 
-// std::getline with a bound: memory stays bounded whatever the file (a line of /dev/zero
-// never ends). False at the end of the file; throws naming the line when it is too long.
-// A CRLF line ending and, on line 1, a UTF-8 byte-order mark are taken (text.h).
-bool ReadLine(std::istream& in, std::string* line, const std::string& path, int n) {
-  line->clear();
-  char ch;
-  bool any = false;
-  while (in.get(ch)) {
-    any = true;
-    if (ch == '\n') break;
-    if (line->size() >= kMaxRecordingLineBytes) {
-      throw ReadError(path + ":" + std::to_string(n) + ": line longer than " +
-                      std::to_string(kMaxRecordingLineBytes) + " bytes: not a text recording");
-    }
-    line->push_back(ch);
-  }
-  if (any) CleanLine(line, n == 1);
-  return any;
-}
+ private:
+  TextLines lines_;
+};
 
 // The columns of `wanted` (after "t") in the header `cols`, and the optional run column
 // (*run_col, -1 if none); throws naming a missing, repeated or unexpected column.
@@ -150,8 +116,10 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
   if (index.count(kRunColumn)) *run_col = index[kRunColumn];
   for (const auto& w : all) {
     if (!index.count(w)) {
-      throw ReadError(where + ": header lacks column '" + w + "' (expected header '" + expected +
-                      "')");
+      std::string read;
+      for (const auto& c : cols) read += (read.empty() ? "" : ",") + c;
+      throw ReadError(where + ": the header '" + Escaped(read) + "' lacks column '" + w +
+                      "' (expected header '" + expected + "')");
     }
     order.push_back(index[w]);
   }
@@ -168,14 +136,13 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
 // column's value when the file has one (*has_run).
 std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted,
                          bool* has_run) {
-  std::ifstream in = Open(path);
+  Lines lines(path);
   std::string line;
-  int n = 0;
   std::vector<int> order;
   int run_col = -1;
   std::vector<Row> rows;
-  while (ReadLine(in, &line, path, n + 1)) {
-    ++n;
+  while (lines.Next(&line)) {
+    const int n = lines.number();
     line = Trim(line);
     if (line.empty() || line[0] == '#') continue;
     const auto cols = Split(line, false);
@@ -205,12 +172,11 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
 
 // Whitespace-separated numeric rows with '#' comments (MR.CLAM .dat).
 std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
-  std::ifstream in = Open(path);
+  Lines lines(path);
   std::string line;
-  int n = 0;
   std::vector<Row> rows;
-  while (ReadLine(in, &line, path, n + 1)) {
-    ++n;
+  while (lines.Next(&line)) {
+    const int n = lines.number();
     line = Trim(line);
     if (line.empty()) continue;
     if (line[0] == '#') {

@@ -4,13 +4,11 @@
 #include <ceres/rotation.h>
 
 #include <Eigen/Dense>
-#include <charconv>
 #include <cmath>
-#include <fstream>
 #include <map>
-#include <sstream>
 #include <stdexcept>
 
+#include "kincal/csv.h"
 #include "kincal/estimation/ceres_logging.h"
 #include "kincal/text.h"
 
@@ -167,22 +165,15 @@ bool DltView(const CalibrationView& v, Eigen::Matrix3d* K, Eigen::Matrix3d* R, E
 namespace {
 
 std::vector<CalibrationView> ReadCalibrationPointsOrThrow(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw CalibrationError(path + ": cannot open for reading");
+  TextLines lines(path, "points file");
   std::string line;
-  int n = 0;
   std::map<std::string, CalibrationView> views;
   std::vector<std::string> order;
   bool header = false;
-  while (std::getline(in, line)) {
-    ++n;
-    CleanLine(&line, n == 1);  // CRLF, a byte-order mark
+  while (lines.Next(&line)) {
     if (line.empty() || line[0] == '#') continue;
-    std::vector<std::string> cols;
-    std::stringstream ss(line);
-    std::string c;
-    while (std::getline(ss, c, ',')) cols.push_back(c);
-    const std::string where = path + ":" + std::to_string(n);
+    const std::vector<std::string> cols = SplitCsvFields(line);
+    const std::string where = path + ":" + std::to_string(lines.line_number());
     if (!header) {
       if (cols.size() != 6 || cols[0] != "view" || cols[1] != "X" || cols[5].substr(0, 1) != "v") {
         throw CalibrationError(where + ": expected header 'view,X,Y,Z,u,v', got '" + Escaped(line) +
@@ -196,8 +187,7 @@ std::vector<CalibrationView> ReadCalibrationPointsOrThrow(const std::string& pat
     double v[5];
     for (int k = 0; k < 5; ++k) {
       const std::string& tok = cols[static_cast<size_t>(k + 1)];
-      const auto [end, ec] = std::from_chars(tok.data(), tok.data() + tok.size(), v[k]);
-      if (ec != std::errc() || end != tok.data() + tok.size() || !std::isfinite(v[k])) {
+      if (!ParseFiniteNumber(tok, &v[k])) {
         throw CalibrationError(where + ": column " + std::to_string(k + 2) +
                                ": expected a number, got '" + Escaped(tok) + "'");
       }
@@ -209,6 +199,7 @@ std::vector<CalibrationView> ReadCalibrationPointsOrThrow(const std::string& pat
     views[cols[0]].object.emplace_back(v[0], v[1], v[2]);
     views[cols[0]].image.emplace_back(v[3], v[4]);
   }
+  if (!lines.status().ok()) throw CalibrationError(lines.status().message());
   if (!header) throw CalibrationError(path + ": empty file (no header)");
   std::vector<CalibrationView> out;
   for (const auto& k : order) out.push_back(views[k]);

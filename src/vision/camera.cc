@@ -4,7 +4,6 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <opencv2/core.hpp>
 #include <sstream>
@@ -151,10 +150,9 @@ CameraModel ReadRosCameraInfo(const std::string& path) {
 
 // OpenCV's YAML files open with a %YAML directive; camera_info files do not.
 bool IsRosCameraInfo(const std::string& path) {
-  std::ifstream in(path);
+  TextLines lines(path, "camera intrinsics");
   std::string first;
-  if (!std::getline(in, first)) return false;
-  CleanLine(&first, true);
+  if (!lines.Next(&first)) return false;  // the reader below names what is wrong
   return first.rfind("%YAML", 0) != 0 && first.rfind("<?xml", 0) != 0 && first.rfind("{", 0) != 0;
 }
 

@@ -87,17 +87,21 @@ record: {frame_encoding: png}
 }
 
 // Issue 34: a config saved by a Windows editor (CRLF, a UTF-8 byte-order mark) reads as its
-// LF twin.
+// LF twin; so does one with a lone CR (yaml-cpp took the comment on a CR line to run on,
+// and the keys after it were lost) and one in UTF-16.
 TEST(Config, CrlfAndByteOrderMarkReadAsPlainText) {
   const std::string text =
-      "source: replay\nreplay: {path: run.lcm}\npose:\n  method: lowe\n"
+      "# a replay\nsource: replay  # from a log\nreplay: {path: run.lcm}\npose:\n  method: lowe\n"
       "robot:\n  model: diffdrive\n  fixed: {d: 0.3}\n";
-  const DaemonConfig c = Load(WriteConfig("crlf.yaml", ::kincal::testing::WindowsText(text)));
-  EXPECT_EQ(c.source, SourceKind::kReplay);
-  EXPECT_TRUE(c.replay.path.ends_with("/run.lcm")) << c.replay.path;
-  EXPECT_EQ(c.pose.method, PoseMethod::kLowe);
-  EXPECT_EQ(c.robot.model, "diffdrive");
-  EXPECT_EQ(c.robot.fixed.at("d"), 0.3);
+  for (const auto& [system, other] : ::kincal::testing::OtherSystemsText(text)) {
+    const DaemonConfig c = Load(WriteConfig("crlf.yaml", other));
+    EXPECT_EQ(c.source, SourceKind::kReplay) << system;
+    EXPECT_TRUE(c.replay.path.ends_with("/run.lcm")) << system << ": " << c.replay.path;
+    EXPECT_EQ(c.pose.method, PoseMethod::kLowe) << system;
+    EXPECT_EQ(c.robot.model, "diffdrive") << system;
+    ASSERT_EQ(c.robot.fixed.count("d"), 1u) << system;
+    EXPECT_EQ(c.robot.fixed.at("d"), 0.3) << system;
+  }
 }
 
 TEST(Config, AWrongChoiceNamesFileLineKeyAndTheChoices) {

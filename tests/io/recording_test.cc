@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "io/io_test_util.h"
 #include "windows_text.h"
 
@@ -16,7 +18,7 @@ const char* kPoses = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0,0\n";
 
 TEST_F(RecordingCsv, MissingColumnNamesFileLineAndExpectedHeader) {
   const std::string e = Error("t,v\n0,1\n", kPoses);
-  EXPECT_NE(e.find("c.csv:1: header lacks column 'omega' (expected header 't,v,omega')"),
+  EXPECT_NE(e.find("c.csv:1: the header 't,v' lacks column 'omega' (expected header 't,v,omega')"),
             std::string::npos)
       << e;
 }
@@ -40,22 +42,30 @@ TEST_F(RecordingCsv, NonNumericValueNamesLineAndColumn) {
 }
 
 // Issue 34: files from Windows tools (CRLF) and spreadsheets (a UTF-8 byte-order mark) read
-// as their LF twins; what is invisible in a bad token is shown escaped.
+// as their LF twins, and so do a lone CR's (Excel for Mac's "CSV (Macintosh)": it read as
+// one line, "column '0' appears twice") and UTF-16's (a spreadsheet's "Unicode text": "header
+// lacks column 't'"); what is invisible in a bad token is shown escaped.
 TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
   const auto model = MakeModel("unicycle").value();
   const std::string c = "t,v,omega\n0,1,0\n1,1,0.5\n2,1,0\n";
   const std::string p = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0.1,0.2\n";
   const Recording plain = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model).value();
-  const StatusOr<Recording> win = ReadCsvRecording(
-      Write("cw.csv", testing::WindowsText(c)), Write("pw.csv", testing::WindowsText(p)), *model);
-  ASSERT_TRUE(win.ok()) << win.status().message();
-  ASSERT_EQ(win->poses.size(), plain.poses.size());
-  for (size_t k = 0; k < plain.poses.size(); ++k) {
-    EXPECT_EQ(win->poses[k].t_ns, plain.poses[k].t_ns);
-    EXPECT_EQ(win->poses[k].z, plain.poses[k].z);
+  const auto ps = testing::OtherSystemsText(p);
+  for (const auto& [system, text] : testing::OtherSystemsText(c)) {
+    const std::string pose_text = std::find_if(ps.begin(), ps.end(), [&](const auto& e) {
+                                    return std::string(e.first) == system;
+                                  })->second;
+    const StatusOr<Recording> win =
+        ReadCsvRecording(Write("cw.csv", text), Write("pw.csv", pose_text), *model);
+    ASSERT_TRUE(win.ok()) << system << ": " << win.status().message();
+    ASSERT_EQ(win->poses.size(), plain.poses.size()) << system;
+    for (size_t k = 0; k < plain.poses.size(); ++k) {
+      EXPECT_EQ(win->poses[k].t_ns, plain.poses[k].t_ns) << system;
+      EXPECT_EQ(win->poses[k].z, plain.poses[k].z) << system;
+    }
+    ASSERT_EQ(win->controls.size(), plain.controls.size()) << system;
+    EXPECT_EQ(win->controls.ValuesAt(1)[1], 0.5) << system;
   }
-  ASSERT_EQ(win->controls.size(), plain.controls.size());
-  EXPECT_EQ(win->controls.ValuesAt(1)[1], 0.5);
   // An invisible character in a value (a spreadsheet's no-break space) is named, escaped.
   const std::string e = Error("t,v,omega\n0,1\xC2\xA0,0\n1,1,0\n", kPoses);
   EXPECT_NE(e.find("c.csv:2: column 'v': expected a finite number, got '1\\xC2\\xA0'"),
@@ -65,13 +75,37 @@ TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
 
 TEST_F(RecordingCsv, MrclamFilesWithCrlfAndByteOrderMark) {
   const std::string d = dir_.string();
-  Write("Robot1_Odometry.dat", "\xEF\xBB\xBF# Time [sec]\r\n10.0 0.1 0\r\n10.1 0.1 0.2\r\n");
-  Write("Robot1_Groundtruth.dat", "# comment\r\n10.0 1 2 0.5\r\n10.2 1.01 2 0.5\r\n");
-  const StatusOr<Recording> r = ReadMrclam(d, 1);
+  const auto gt = testing::OtherSystemsText("# comment\n10.0 1 2 0.5\n10.2 1.01 2 0.5\n");
+  size_t k = 0;
+  for (const auto& [system, text] :
+       testing::OtherSystemsText("# Time [sec]\n10.0 0.1 0\n10.1 0.1 0.2\n")) {
+    Write("Robot1_Odometry.dat", text);
+    Write("Robot1_Groundtruth.dat", gt[k++].second);
+    const StatusOr<Recording> r = ReadMrclam(d, 1);
+    ASSERT_TRUE(r.ok()) << system << ": " << r.status().message();
+    EXPECT_EQ(r->stats.comment_lines, 2) << system;
+    EXPECT_EQ(r->controls.size(), 2u) << system;
+    EXPECT_EQ(r->poses.size(), 2u) << system;
+  }
+}
+
+// Issue 34's sweep: a spreadsheet or pandas saving with every field quoted, and C's "%+g",
+// read as their plain twins; what follows a closing quote is named.
+TEST_F(RecordingCsv, QuotedFieldsAndPlusSignsAreNumbers) {
+  const auto model = MakeModel("unicycle").value();
+  const StatusOr<Recording> r = ReadCsvRecording(
+      Write("c.csv", "\"t\",\"v\",\"omega\"\n\"0\",\"1\",\"0\"\n\"1\",\"+1\",\"+0.5\"\n"),
+      Write("p.csv", "t,x,y,theta\n+0,+0,-0,0\n+1,+1.5e+0,0,0\n"), *model);
   ASSERT_TRUE(r.ok()) << r.status().message();
-  EXPECT_EQ(r->stats.comment_lines, 2);
-  EXPECT_EQ(r->controls.size(), 2u);
-  EXPECT_EQ(r->poses.size(), 2u);
+  EXPECT_EQ(r->controls.ValuesAt(1)[1], 0.5);
+  EXPECT_EQ(r->poses[1].z.x(), 1.5);
+  EXPECT_NE(Error("t,v,omega\n0,\"1\"m,0\n1,1,0\n", kPoses)
+                .find("c.csv:2: column 'v': expected a finite number, got '1m'"),
+            std::string::npos);
+  // A header the reader cannot use is shown as it was read.
+  EXPECT_NE(Error("t,v,om\xC3\xA9ga\n0,1,0\n", kPoses)
+                .find("c.csv:1: the header 't,v,om\\xC3\\xA9ga' lacks column 'omega'"),
+            std::string::npos);
 }
 
 TEST_F(RecordingCsv, TimeGoingBackwardsIsAnError) {
@@ -118,7 +152,7 @@ TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
       ReadCsvRecording(dir_.string(), Write("p.csv", kPoses), *MakeModel("unicycle").value())
           .status()
           .message();
-  EXPECT_NE(e.find("is a directory, expected a text file"), std::string::npos) << e;
+  EXPECT_NE(e.find(": cannot open recording file: Is a directory"), std::string::npos) << e;
   e = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n"), "/dev/zero",
                        *MakeModel("unicycle").value())
           .status()

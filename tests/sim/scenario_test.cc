@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "source_dir.h"
+#include "windows_text.h"
 
 namespace kincal {
 namespace {
@@ -27,6 +28,30 @@ TEST(Scenario, ShippedExampleLoads) {
   EXPECT_GT(s.duration_s, 0.0);
   EXPECT_GT(s.camera.rate_hz, 0.0);
   EXPECT_FALSE(s.truth.empty());
+}
+
+// Issue 34: the shipped example as other systems save it (CRLF and a byte-order mark, a lone
+// CR, UTF-16) reads as itself. With a lone CR, yaml-cpp took the first comment to run to the
+// end of the file: "controls.low/high need 2 values" for a file that has them.
+TEST(Scenario, OtherSystemsTextReadsAsItself) {
+  const Scenario plain = LoadScenario(Source("config/sim_diffdrive.yaml")).value();
+  std::ifstream in(Source("config/sim_diffdrive.yaml"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto path =
+      (std::filesystem::temp_directory_path() / "kincal_scenario_other.yaml").string();
+  for (const auto& [system, other] : ::kincal::testing::OtherSystemsText(text)) {
+    std::ofstream(path, std::ios::binary) << other;
+    const StatusOr<Scenario> s = LoadScenario(path);
+    ASSERT_TRUE(s.ok()) << system << ": " << s.status().message();
+    EXPECT_EQ(s->model, plain.model) << system;
+    EXPECT_EQ(s->truth, plain.truth) << system;
+    EXPECT_EQ(s->guess, plain.guess) << system;
+    EXPECT_EQ(s->control_low, plain.control_low) << system;
+    EXPECT_EQ(s->control_high, plain.control_high) << system;
+    EXPECT_EQ(s->pose_sigma, plain.pose_sigma) << system;
+    EXPECT_EQ(s->duration_s, plain.duration_s) << system;
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(Scenario, UnknownKeyIsNamedWithFileAndLine) {

@@ -99,8 +99,8 @@ TEST(Camera, NonFiniteNumbersAndHugeImagesAreRefused) {
   EXPECT_EQ(error, "camera image size 99999999x480 is over 16384 px a side");
 }
 
-// Issue 34: both camera files as Windows tools save them (CRLF, a UTF-8 byte-order mark)
-// read as their LF twins.
+// Issue 34: both camera files as Windows tools save them (CRLF, a UTF-8 byte-order mark),
+// with a lone CR (classic Mac) and in UTF-16, read as their LF twins.
 TEST(Camera, CrlfAndByteOrderMarkReadAsPlainText) {
   const auto dir = std::filesystem::temp_directory_path();
   const std::string opencv = (dir / "kincal_cam_crlf_cv.yaml").string();
@@ -110,12 +110,15 @@ TEST(Camera, CrlfAndByteOrderMarkReadAsPlainText) {
   for (const std::string& path : {opencv, ros}) {
     std::ifstream in(path);
     const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const std::string crlf = path + ".crlf.yaml";
-    std::ofstream(crlf, std::ios::binary) << ::kincal::testing::WindowsText(text);
-    const CameraModel c = ReadCameraYaml(crlf).value();
-    EXPECT_EQ(c.width, TestCamera().width) << crlf;
-    EXPECT_DOUBLE_EQ(c.fx, TestCamera().fx) << crlf;
-    EXPECT_DOUBLE_EQ(c.k3, TestCamera().k3) << crlf;
+    for (const auto& [system, other] : ::kincal::testing::OtherSystemsText(text)) {
+      const std::string crlf = path + ".other.yaml";
+      std::ofstream(crlf, std::ios::binary) << other;
+      const StatusOr<CameraModel> c = ReadCameraYaml(crlf);
+      ASSERT_TRUE(c.ok()) << path << ", " << system << ": " << c.status().message();
+      EXPECT_EQ(c->width, TestCamera().width) << path << ", " << system;
+      EXPECT_DOUBLE_EQ(c->fx, TestCamera().fx) << path << ", " << system;
+      EXPECT_DOUBLE_EQ(c->k3, TestCamera().k3) << path << ", " << system;
+    }
   }
 }
 

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <vector>
 
 #include "windows_text.h"
 
@@ -21,9 +22,12 @@ TEST(OpenCvFile, ByteOrderMarkAndCrlfAreTaken) {
   }
   std::ifstream in(plain);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::string crlf = (dir / "kincal_ocv_crlf.yaml").string();
-  std::ofstream(crlf, std::ios::binary) << ::kincal::testing::WindowsText(text);
-  for (const std::string& path : {plain, crlf}) {
+  std::vector<std::string> paths = {plain};
+  for (const auto& [system, other] : ::kincal::testing::OtherSystemsText(text)) {
+    paths.push_back((dir / ("kincal_ocv_" + std::to_string(paths.size()) + ".yaml")).string());
+    std::ofstream(paths.back(), std::ios::binary) << other;
+  }
+  for (const std::string& path : paths) {
     cv::FileStorage fs;
     const Status s = OpenOpenCvFile(path, "test", &fs);
     ASSERT_TRUE(s.ok()) << s.message();

@@ -12,6 +12,7 @@
 
 #include "source_dir.h"
 #include "temp_path.h"
+#include "windows_text.h"
 
 namespace kincal::vision {
 namespace {
@@ -40,6 +41,25 @@ TEST(SetupFiles, TheShippedLargeTargetReadsAsWritten) {
   ASSERT_EQ(t.markers.size(), 4u);
   EXPECT_DOUBLE_EQ(t.markers[3].x(), -0.060);
   EXPECT_DOUBLE_EQ(t.markers[3].y(), 0.075);
+}
+
+// Issue 34: the shipped layout as other systems save it (CRLF and a byte-order mark, a lone
+// CR, UTF-16) reads as itself.
+TEST(SetupFiles, OtherSystemsTextReadsAsItself) {
+  const std::string shipped = kincal::testing::SourceDir() + "/config/target_large.yaml";
+  const TargetLayout plain = ReadTargetLayoutYaml(shipped).value();
+  std::ifstream in(shipped);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [system, other] : kincal::testing::OtherSystemsText(text)) {
+    const std::string path = TempPath("target_other.yaml");
+    std::ofstream(path, std::ios::binary) << other;
+    const StatusOr<TargetLayout> t = ReadTargetLayoutYaml(path);
+    ASSERT_TRUE(t.ok()) << system << ": " << t.status().message();
+    EXPECT_EQ(t->name, plain.name) << system;
+    EXPECT_EQ(t->marker_radius_m, plain.marker_radius_m) << system;
+    EXPECT_EQ(t->plate_size_m, plain.plate_size_m) << system;
+    EXPECT_EQ(t->markers, plain.markers) << system;
+  }
 }
 
 TEST(SetupFiles, NoPathIsTheThesisPlate) {

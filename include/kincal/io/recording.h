@@ -20,10 +20,6 @@
 namespace kincal {
 
 // A measured pose in a recording (CSV, MR.CLAM, LCM log).
-// Longest line the text readers accept (a CSV row, an MR.CLAM line): memory is bounded
-// by this, not by the input.
-inline constexpr size_t kMaxRecordingLineBytes = 1 << 16;
-
 struct RecordedPose {
   TimeNs t_ns = 0;                              // recording time base
   Eigen::Vector3d z = Eigen::Vector3d::Zero();  // x (m), y (m), theta (rad)
