@@ -4,8 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-
 #include "io/io_test_util.h"
 #include "windows_text.h"
 
@@ -50,13 +48,12 @@ TEST_F(RecordingCsv, CrlfAndByteOrderMarkReadAsPlainText) {
   const std::string c = "t,v,omega\n0,1,0\n1,1,0.5\n2,1,0\n";
   const std::string p = "t,x,y,theta\n0,0,0,0\n1,1,0,0\n2,2,0.1,0.2\n";
   const Recording plain = ReadCsvRecording(Write("c.csv", c), Write("p.csv", p), *model).value();
+  const auto cs = testing::OtherSystemsText(c);
   const auto ps = testing::OtherSystemsText(p);
-  for (const auto& [system, text] : testing::OtherSystemsText(c)) {
-    const std::string pose_text = std::find_if(ps.begin(), ps.end(), [&](const auto& e) {
-                                    return std::string(e.first) == system;
-                                  })->second;
+  for (size_t i = 0; i < cs.size(); ++i) {
+    const char* system = cs[i].first;
     const StatusOr<Recording> win =
-        ReadCsvRecording(Write("cw.csv", text), Write("pw.csv", pose_text), *model);
+        ReadCsvRecording(Write("cw.csv", cs[i].second), Write("pw.csv", ps[i].second), *model);
     ASSERT_TRUE(win.ok()) << system << ": " << win.status().message();
     ASSERT_EQ(win->poses.size(), plain.poses.size()) << system;
     for (size_t k = 0; k < plain.poses.size(); ++k) {
