@@ -100,6 +100,18 @@ put("lcm_messages", "pose", pose(7))
 c = open(os.path.join(repo, "tests/data/controls.csv")).read()
 p = open(os.path.join(repo, "tests/data/poses.csv")).read()
 put("csv", "small", bytes([128]) + ("\n".join(c.splitlines()[:20]) + "\n").encode() + ("\n".join(p.splitlines()[:20]) + "\n").encode())
+# The same rows as other systems' tools save them: quoted fields and '+' signs with a lone
+# CR (Excel for Mac), and UTF-16 with CRLF (a spreadsheet's "Unicode text"). The first byte
+# is chosen so that the harness cuts the input where the poses file begins.
+c20 = "\n".join(c.splitlines()[:20]) + "\n"
+p20 = "\n".join(p.splitlines()[:20]) + "\n"
+quoted = "\r".join('"' + '","'.join(("+" + v if v[:1].isdigit() else v) for v in row.split(",")) + '"'
+                   for row in c20.splitlines()).encode()
+p16 = b"\xff\xfe" + p20.replace("\n", "\r\n").encode("utf-16-le")
+size = 1 + len(quoted) + len(p16)
+first = next(b for b in range(256) if 1 + b * size // 256 >= 1 + len(quoted))
+assert 1 + first * size // 256 == 1 + len(quoted), "no first byte cuts the seed at its seam"
+put("csv", "other_systems", bytes([first]) + quoted + p16)
 put("mrclam", "small", bytes([100]) + b"# Time [sec] Forward Velocity [m/s] Angular Velocity[rad/s]\n"
     b"1248272272.841 0.0 0.0\n1248272272.900 0.1 0.02\n" b"# Time [sec] x [m] y [m] orientation [rad]\n"
     b"1248272272.844 3.0 -1.1 2.3\n1248272272.861 3.0 -1.1 2.3\n")
