@@ -16,6 +16,7 @@
 #include "kincal/sim/scenario.h"
 #include "kincal/vision/camera.h"
 #include "kincal/vision/setup_files.h"
+#include "options.h"
 #include "python_scripts.h"
 
 namespace kincal::app {
@@ -104,6 +105,15 @@ StatusOr<std::unique_ptr<Workspace>> WorkspaceFrom(const PlanArgs& a) {
 }
 
 StatusOr<PlanOptions> OptionsFrom(const System& sys, const PlanArgs& a) {
+  std::ostringstream segment;
+  if (a.segment_s > a.duration_s) {
+    segment << "--segment " << a.segment_s << " s is longer than --duration " << a.duration_s
+            << " s";
+  } else if (a.segment_s * a.rate_hz < 1.0) {
+    segment << "--segment " << a.segment_s
+            << " s is shorter than one control period (1/--rate: " << 1.0 / a.rate_hz << " s)";
+  }
+  if (!segment.str().empty()) return Status::Error(segment.str());
   PlanOptions o;
   o.duration_s = a.duration_s;
   o.control_rate_hz = a.rate_hz;
@@ -245,13 +255,16 @@ Command AddPlan(CLI::App& app) {
   app.add_option("--margin", a->margin_px, "markers stay this far inside the frame, px");
   app.add_option("--arena", a->arena, "workspace X0,Y0,X1,Y1 on the floor, m");
   app.add_option("--pose-sigma", a->pose_sigma, "pose noise SX,SY,STHETA (m, m, rad)");
-  app.add_option("--pose-rate", a->pose_rate_hz, "poses per second");
-  app.add_option("--duration", a->duration_s, "driving time, s");
+  app.add_option("--pose-rate", a->pose_rate_hz, "poses per second")
+      ->check(AboveAndAtMost(0.0, kMaxDesignPoseRateHz));
+  app.add_option("--duration", a->duration_s, "driving time, s")
+      ->check(AboveAndAtMost(0.0, kMaxPlanDurationS));
   app.add_option("--limits", a->limits,
                  "<control>=max|..|, accel=.. (units/s), accel_<control>=.., curvature=.. (1/m)")
       ->required();
-  app.add_option("--rate", a->rate_hz, "control samples per second");
-  app.add_option("--segment", a->segment_s, "seconds per planning decision");
+  app.add_option("--rate", a->rate_hz, "control samples per second")
+      ->check(Between(1.0, kMaxPlanControlRateHz));
+  app.add_option("--segment", a->segment_s, "seconds per planning decision")->check(AboveZero());
   app.add_option("--targets", a->targets,
                  "target sigma, name=value,...: the parameters scored and timed (default: all, "
                  "scaled by their prior sigma)");

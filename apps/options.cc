@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,13 @@ CLI::Validator NumberCheck(std::function<bool(double)> ok, std::string expected)
       "");
 }
 
+// A limit as people write it: 3600, 0.5, 1e-06.
+std::string Number(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
 }  // namespace
 
 CLI::Validator AtLeastZero() {
@@ -34,6 +42,16 @@ CLI::Validator AboveZero() {
 
 CLI::Validator AtLeastOne() {
   return NumberCheck([](double v) { return v >= 1; }, "a number >= 1");
+}
+
+CLI::Validator AboveAndAtMost(double low, double high) {
+  return NumberCheck([=](double v) { return v > low && v <= high; },
+                     "a number in (" + Number(low) + ", " + Number(high) + "]");
+}
+
+CLI::Validator Between(double low, double high) {
+  return NumberCheck([=](double v) { return v >= low && v <= high; },
+                     "a number in [" + Number(low) + ", " + Number(high) + "]");
 }
 
 void RefuseNonFiniteNumbers(CLI::App& app) {

@@ -12,6 +12,10 @@ CLI::Validator AtLeastZero();
 CLI::Validator AboveZero();
 // A number >= 1 (a count of runs, loops).
 CLI::Validator AtLeastOne();
+// A number in (low, high] ("--duration: a number in (0, 3600] expected, not '5000'").
+CLI::Validator AboveAndAtMost(double low, double high);
+// A number in [low, high].
+CLI::Validator Between(double low, double high);
 // Adds to every floating-point option of `app` and of each of its commands a check that
 // refuses nan, inf and 1e999 by the option's name, before a command runs.
 void RefuseNonFiniteNumbers(CLI::App& app);

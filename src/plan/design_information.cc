@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "kincal/angles.h"
@@ -32,8 +33,10 @@ bool DesignInformationOptions::IsValid(std::string* error) const {
     *error = "pose_sigma: three positive values (m, m, rad) expected";
     return false;
   }
-  if (!(pose_rate_hz > 0.0 && pose_rate_hz <= 1000.0)) {
-    *error = "pose_rate_hz: in (0, 1000] expected";
+  if (!(pose_rate_hz > 0.0 && pose_rate_hz <= kMaxDesignPoseRateHz)) {
+    std::ostringstream why;
+    why << "pose_rate_hz: in (0, " << kMaxDesignPoseRateHz << "] Hz expected, not " << pose_rate_hz;
+    *error = why.str();
     return false;
   }
   return true;

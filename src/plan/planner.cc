@@ -66,15 +66,21 @@ void KeepTheBetter(const PlanOptions& o, const Eigen::VectorXd& prior_sigma,
 
 // PlanOptions::IsValid by group: the timing, the control limits, the design.
 bool ValidTiming(const PlanOptions& o, std::string* error) {
-  if (!(o.duration_s > 0.0 && o.duration_s <= 3600.0) ||
-      !(o.control_rate_hz >= 1.0 && o.control_rate_hz <= 1000.0) ||
-      !(o.segment_s >= 1.0 / o.control_rate_hz && o.segment_s <= o.duration_s)) {
-    *error =
-        "duration in (0, 3600] s, rate in [1, 1000] Hz and a segment between one control "
-        "period and the duration expected";
-    return false;
+  std::ostringstream why;
+  if (!(o.duration_s > 0.0 && o.duration_s <= kMaxPlanDurationS)) {
+    why << "duration_s: in (0, " << kMaxPlanDurationS << "] s expected, not " << o.duration_s;
+  } else if (!(o.control_rate_hz >= 1.0 && o.control_rate_hz <= kMaxPlanControlRateHz)) {
+    why << "control_rate_hz: in [1, " << kMaxPlanControlRateHz << "] Hz expected, not "
+        << o.control_rate_hz;
+  } else if (!(o.segment_s >= 1.0 / o.control_rate_hz)) {
+    why << "segment_s: " << o.segment_s << " s is shorter than one control period ("
+        << 1.0 / o.control_rate_hz << " s at " << o.control_rate_hz << " Hz)";
+  } else if (!(o.segment_s <= o.duration_s)) {
+    why << "segment_s: " << o.segment_s << " s is longer than the plan (duration_s " << o.duration_s
+        << " s)";
   }
-  return true;
+  *error = why.str();
+  return error->empty();
 }
 
 bool ValidLimits(const PlanOptions& o, const System& sys, std::string* error) {

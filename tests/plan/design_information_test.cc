@@ -128,6 +128,7 @@ TEST(DesignInformation, OptionsAreChecked) {
   o = {};
   o.pose_rate_hz = -1.0;
   EXPECT_FALSE(o.IsValid(&error));
+  EXPECT_EQ(error, "pose_rate_hz: in (0, 1000] Hz expected, not -1");
 }
 
 }  // namespace

@@ -645,6 +645,25 @@ TEST(Plan, OptionsAreCheckedAndNamed) {
   o = c.o;
   o.levels = 4;
   EXPECT_FALSE(o.IsValid(c.sys, &error));
+  // Issue 34's sweep: the timing's three checks were one message ("duration in (0, 3600] s,
+  // rate in [1, 1000] Hz and a segment between one control period and the duration
+  // expected") for `--duration 0.1` (the default segment, 0.5 s, longer than it).
+  o = c.o;
+  o.duration_s = 0.1;
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_EQ(error, "segment_s: 0.5 s is longer than the plan (duration_s 0.1 s)");
+  o = c.o;
+  o.segment_s = 0.01;
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_EQ(error, "segment_s: 0.01 s is shorter than one control period (0.05 s at 20 Hz)");
+  o = c.o;
+  o.duration_s = 5000.0;
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_EQ(error, "duration_s: in (0, 3600] s expected, not 5000");
+  o = c.o;
+  o.control_rate_hz = 0.5;
+  EXPECT_FALSE(o.IsValid(c.sys, &error));
+  EXPECT_EQ(error, "control_rate_hz: in [1, 1000] Hz expected, not 0.5");
   // A workspace too small for the start: a status, not a crash.
   Motion m;
   const auto tiny = MakeArena(0.5, 0.5, 0.6, 0.6);

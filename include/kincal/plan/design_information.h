@@ -23,9 +23,12 @@
 
 namespace kincal {
 
+// The fastest pose rate a design is predicted for.
+inline constexpr double kMaxDesignPoseRateHz = 1000.0;
+
 struct DesignInformationOptions {
   Eigen::Vector3d pose_sigma{0.002, 0.002, 0.005};  // pose measurement noise (m, m, rad)
-  double pose_rate_hz = 15.0;                       // pose measurements per second
+  double pose_rate_hz = 15.0;  // pose measurements per second, (0, kMaxDesignPoseRateHz]
   bool IsValid(std::string* error) const;
 };
 

@@ -39,10 +39,14 @@ namespace kincal {
 
 enum class DesignCriterion { kA, kD, kTargets };
 
+// The longest plan, and the fastest control rate, a plan is made for.
+inline constexpr double kMaxPlanDurationS = 3600.0;
+inline constexpr double kMaxPlanControlRateHz = 1000.0;
+
 struct PlanOptions {
-  double duration_s = 60.0;
-  double control_rate_hz = 20.0;  // samples of the output sequence per second
-  double segment_s = 0.5;         // one decision per segment
+  double duration_s = 60.0;       // (0, kMaxPlanDurationS]
+  double control_rate_hz = 20.0;  // samples of the output sequence per second, >= 1
+  double segment_s = 0.5;         // one decision per segment: a control period to duration_s
   std::vector<double> max_abs;    // per control channel, > 0
   std::vector<double> max_accel;  // per channel, units per second; 0 or empty: none
   double max_curvature = 0.0;     // |omega / v| (1/m) at the design point; 0: none
