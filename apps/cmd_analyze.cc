@@ -250,6 +250,7 @@ Command AddAnalyze(CLI::App& app) {
       ->capture_default_str();
   return [a]() -> StatusOr<int> {
     KINCAL_ASSIGN_OR_RETURN(AnalyzeOptions o, OptionsFrom(a.get()));
+    KINCAL_RETURN_IF_ERROR(CheckOutputFolder(a->out, "report"));
     KINCAL_ASSIGN_OR_RETURN(const Recording rec, ReadInput(*a, o));
     o.progress = Progress();
     KINCAL_ASSIGN_OR_RETURN(const AnalyzeResult r, Analyze(rec, o));

@@ -213,6 +213,7 @@ StatusOr<int> Run(const PlanArgs& a) {
   Eigen::MatrixXd prior;
   PlanOptions o;
   KINCAL_RETURN_IF_ERROR(SetUp(a, &sys, &p, &prior, &o));
+  KINCAL_RETURN_IF_ERROR(CheckOutputFolder(a.out, "plan"));
   if (a.advise) return RunAdvice(*sys, p, prior, o, a);
   KINCAL_ASSIGN_OR_RETURN(const auto ws, WorkspaceFrom(a));
   std::cerr << "kincal plan: " << a.duration_s << " s in the " << ws->Describe() << "\n";

@@ -38,6 +38,10 @@ inline constexpr long kMaxImagePixels = 64L << 20;
 
 // Writes a tool's output whole or not at all (kincal/io/output_file.h).
 Status WriteOutput(const std::string& path, const std::string& text, const char* what);
+// Before a long computation: the folder `dir` can be made or written into, else an error
+// naming why ("out: cannot write the plan here: /etc/passwd is not a directory"). Nothing
+// is created.
+Status CheckOutputFolder(const std::string& dir, const char* what);
 
 // An analyze report.json's final estimate as a checkpoint; its covariance is diagonal (the
 // report keeps only sigma). An error names the file and field.
