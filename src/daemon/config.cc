@@ -12,7 +12,7 @@
 
 #include "daemon/config_names.h"
 #include "kincal/finite.h"
-#include "kincal/text.h"
+#include "kincal/yaml_file.h"
 
 namespace kincal::daemon {
 namespace {
@@ -372,14 +372,9 @@ void LoadSections(const YAML::Node& root, const std::string& path,
 }
 
 DaemonConfig LoadDaemonConfig(const std::string& path) {
-  const StatusOr<std::string> text = ReadTextFile(path, "config file");
-  if (!text.ok()) throw ConfigError(text.status().message());
-  YAML::Node root;
-  try {
-    root = YAML::Load(text.value());
-  } catch (const YAML::Exception& e) {
-    throw ConfigError(path + ":" + std::to_string(e.mark.line + 1) + ": " + e.msg);
-  }
+  StatusOr<YAML::Node> loaded = LoadYamlFile(path, "config file");
+  if (!loaded.ok()) throw ConfigError(loaded.status().message());
+  YAML::Node root = std::move(loaded).value();
   if (!root || root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
   DaemonConfig c;
   c.file = path;

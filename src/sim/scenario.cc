@@ -8,7 +8,7 @@
 #include <stdexcept>
 
 #include "kincal/finite.h"
-#include "kincal/text.h"
+#include "kincal/yaml_file.h"
 
 namespace kincal {
 
@@ -59,14 +59,9 @@ void CheckKeys(const YAML::Node& n, const std::set<std::string>& known, const st
 }
 
 Scenario LoadScenarioOrThrow(const std::string& file) {
-  const StatusOr<std::string> text = ReadTextFile(file, "scenario");
-  if (!text.ok()) throw ScenarioError(text.status().message());
-  YAML::Node root;
-  try {
-    root = YAML::Load(text.value());
-  } catch (const YAML::Exception& e) {
-    throw ScenarioError(file + ": " + e.what());
-  }
+  StatusOr<YAML::Node> loaded = LoadYamlFile(file, "scenario");
+  if (!loaded.ok()) throw ScenarioError(loaded.status().message());
+  const YAML::Node root = std::move(loaded).value();
   static const std::set<std::string> kKeys = {"model",          "truth",
                                               "hidden_effects", "estimator_effects",
                                               "guess",          "guess_sigma_fraction",

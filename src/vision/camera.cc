@@ -12,6 +12,7 @@
 
 #include "kincal/io/output_file.h"
 #include "kincal/text.h"
+#include "kincal/yaml_file.h"
 #include "vision/opencv_file.h"
 
 namespace kincal::vision {
@@ -94,14 +95,9 @@ namespace {
 // ROS camera_info YAML (camera_calibration_parsers' keys), through yaml-cpp: it carries no
 // %YAML directive, without which OpenCV's reader refuses a file.
 CameraModel ReadRosCameraInfo(const std::string& path) {
-  const StatusOr<std::string> text = ReadTextFile(path, "camera intrinsics");
-  if (!text.ok()) throw CameraFileError(text.status().message());
-  YAML::Node n;
-  try {
-    n = YAML::Load(text.value());
-  } catch (const YAML::Exception& e) {
-    throw CameraFileError(path + ": not YAML (" + e.what() + ")");
-  }
+  StatusOr<YAML::Node> loaded = LoadYamlFile(path, "camera intrinsics");
+  if (!loaded.ok()) throw CameraFileError(loaded.status().message());
+  const YAML::Node n = std::move(loaded).value();
   auto need = [&](const char* key) {
     if (!n.IsMap() || !n[key]) throw CameraFileError(path + ": missing key '" + key + "'");
     return n[key];

@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string_view>
 
-#include "kincal/text.h"
+#include "kincal/yaml_file.h"
 #include "vision/opencv_file.h"
 
 namespace kincal::vision {
@@ -45,14 +45,9 @@ void CheckLayoutKeys(const YAML::Node& n, const std::string& path) {
 
 TargetLayout ReadTargetLayoutYamlOrThrow(const std::string& path) {
   if (path.empty()) return TargetLayout::Thesis();
-  const StatusOr<std::string> text = ReadTextFile(path, "target layout");
-  if (!text.ok()) throw SetupFileError(text.status().message());
-  YAML::Node n;
-  try {
-    n = YAML::Load(text.value());
-  } catch (const YAML::Exception& e) {
-    throw SetupFileError(path + ": " + e.what());
-  }
+  StatusOr<YAML::Node> loaded = LoadYamlFile(path, "target layout");
+  if (!loaded.ok()) throw SetupFileError(loaded.status().message());
+  const YAML::Node n = std::move(loaded).value();
   CheckLayoutKeys(n, path);
   TargetLayout t;
   try {
