@@ -69,8 +69,9 @@ StatusOr<Recording> JoinRuns(std::vector<Recording> parts);
 // over its duration (exact for the increment), held from the interval's start; the last
 // sample of a run holds its last rate. Counts become radians by 2 pi / counts_per_rev
 // (counts_per_rev 0: the positions are radians, and a joint reported in (-pi, pi] is
-// unwrapped). Never across a run's start. An error names the recording when a run has
-// fewer than two samples.
+// unwrapped). Counts of a 16- or 32-bit register that rolls over are unwrapped, and a
+// warning says which channels and how often. Never across a run's start. An error names
+// the recording when a run has fewer than two samples.
 Status PositionsToRates(double counts_per_rev, Recording* rec);
 
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
