@@ -14,6 +14,7 @@
 #include "analysis/regressors.h"
 #include "analysis/runs.h"
 #include "analysis/selection.h"
+#include "analysis/units_check.h"
 #include "analysis/windows.h"
 #include "kincal/system.h"
 
@@ -358,6 +359,8 @@ StatusOr<AnalyzeResult> Analyze(const Recording& rec, const AnalyzeOptions& o) {
   res.after = analysis::MakeReport(final_sys, current.fit, current.eval, accepted, fit_windows);
   res.diagnosis_after = current.diagnosis;
   res.tests_after = analysis::TestResiduals(current.eval, o.horizon_s);
+  for (const std::string& w : analysis::UnitWarnings(*model, current.fit.p))
+    res.warnings.push_back(rec.source + ": " + w);
   res.goodness = Judge(d, res.after.heldout.pos_rms_m);
   JudgeRuns(d, bare, baseline, final_sys, current, &res);
   if (res.goodness.judged && !res.goodness.explains) {
