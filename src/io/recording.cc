@@ -321,6 +321,22 @@ Recording AssembleRuns(const std::vector<Row>& controls, const std::vector<Row>&
   return std::move(rec).value();
 }
 
+// A steering angle (a control in "rad") beyond a right angle is no car's: degrees.
+void WarnOfSteeringInDegrees(const std::vector<Row>& controls, const KinematicModel& model,
+                             const std::string& path, std::vector<std::string>* warnings) {
+  for (size_t c = 0; c < model.controls().size(); ++c) {
+    if (model.controls()[c].unit != "rad") continue;
+    double most = 0.0;
+    for (const auto& r : controls) most = std::max(most, std::abs(r.v[c]));
+    if (most <= 0.5 * M_PI) continue;
+    std::ostringstream m;
+    m << path << ": column '" << model.controls()[c].name << "' reaches " << most
+      << "; kincal expects a steering angle in radians (beyond a right angle, it looks like "
+         "degrees)";
+    warnings->push_back(m.str());
+  }
+}
+
 Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& poses_csv,
                          const KinematicModel& model, bool positions) {
   std::vector<std::string> names;
@@ -343,10 +359,12 @@ Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& pos
                     (control_runs ? poses_csv : controls_csv) +
                     " has none: number the runs in both files");
   }
-  if (control_runs)
-    return AssembleRuns(controls, poses, model.num_controls(), controls_csv, poses_csv);
-  return Assemble(controls_csv + " + " + poses_csv, controls, poses, model.num_controls(),
-                  controls_csv, poses_csv);
+  Recording rec = control_runs
+                      ? AssembleRuns(controls, poses, model.num_controls(), controls_csv, poses_csv)
+                      : Assemble(controls_csv + " + " + poses_csv, controls, poses,
+                                 model.num_controls(), controls_csv, poses_csv);
+  if (!positions) WarnOfSteeringInDegrees(controls, model, controls_csv, &rec.warnings);
+  return rec;
 }
 
 Recording ReadMrclamOrThrow(const std::string& dir, int robot) {

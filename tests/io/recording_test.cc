@@ -180,6 +180,24 @@ TEST_F(RecordingCsv, HeadingInDegreesIsFlagged) {
       << r.warnings[0];
 }
 
+// Issue 34's sweep: a car's steering written in degrees (25 for 25 degrees) was read as
+// 25 rad with nothing said; like a heading in degrees, it is now flagged.
+TEST_F(RecordingCsv, SteeringInDegreesIsFlagged) {
+  const auto bicycle = MakeModel("bicycle").value();
+  const Recording r = ReadCsvRecording(Write("c.csv", "t,v,steer\n0,1,0\n1,1,25\n2,1,-12\n"),
+                                       Write("p.csv", kPoses), *bicycle)
+                          .value();
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("c.csv: column 'steer' reaches 25; kincal expects a steering angle "
+                               "in radians"),
+            std::string::npos)
+      << r.warnings[0];
+  const Recording ok = ReadCsvRecording(Write("c.csv", "t,v,steer\n0,1,0\n1,1,0.4\n2,1,-0.6\n"),
+                                        Write("p.csv", kPoses), *bicycle)
+                           .value();
+  EXPECT_TRUE(ok.warnings.empty());
+}
+
 TEST_F(RecordingCsv, MrclamCommentsAndMissingFile) {
   const std::string d = dir_.string();
   Write("Robot1_Odometry.dat", "# comment\n10.0 0.1 0.0\n10.5 0.1 0.2\n");
