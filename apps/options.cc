@@ -3,9 +3,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <functional>
-#include <sstream>
 #include <string>
 #include <vector>
+
+#include "kincal/text.h"
 
 namespace kincal::app {
 namespace {
@@ -21,13 +22,6 @@ CLI::Validator NumberCheck(std::function<bool(double)> ok, std::string expected)
         return expected + " expected, not '" + text + "'";
       },
       "");
-}
-
-// A limit as people write it: 3600, 0.5, 1e-06.
-std::string Number(double v) {
-  std::ostringstream out;
-  out << v;
-  return out.str();
 }
 
 }  // namespace
@@ -46,12 +40,12 @@ CLI::Validator AtLeastOne() {
 
 CLI::Validator AboveAndAtMost(double low, double high) {
   return NumberCheck([=](double v) { return v > low && v <= high; },
-                     "a number in (" + Number(low) + ", " + Number(high) + "]");
+                     "a number in (" + ShortNumber(low) + ", " + ShortNumber(high) + "]");
 }
 
 CLI::Validator Between(double low, double high) {
   return NumberCheck([=](double v) { return v >= low && v <= high; },
-                     "a number in [" + Number(low) + ", " + Number(high) + "]");
+                     "a number in [" + ShortNumber(low) + ", " + ShortNumber(high) + "]");
 }
 
 void RefuseNonFiniteNumbers(CLI::App& app) {

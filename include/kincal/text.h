@@ -37,6 +37,8 @@ class TextLines {
   const Status& status() const { return status_; }
   // The 1-based number of the line last returned.
   int line_number() const { return line_number_; }
+  // The lines ended at a line longer than the bound (status() says where).
+  bool line_too_long() const { return line_too_long_; }
 
  private:
   enum class Encoding { kUtf8, kUtf16Le, kUtf16Be };
@@ -57,11 +59,16 @@ class TextLines {
   int32_t pending_ = -3;  // a code point read after a lone CR, which begins the next line
   Status status_;
   int line_number_ = 0;
+  bool line_too_long_ = false;
 };
 
 // `text` with what a terminal would not show written out: \r, \n, \t, \\, and other control
 // or non-ASCII bytes as \xNN (so "237.257\r" reads '237.257\r', not '237.257').
 std::string Escaped(std::string_view text);
+
+// A number as a message writes it: six significant digits, no trailing zeros ("3600",
+// "0.5", "1e-06").
+std::string ShortNumber(double v);
 
 // The largest text file read whole (a configuration, a layout, a camera's intrinsics).
 inline constexpr size_t kMaxTextFileBytes = size_t{16} << 20;

@@ -1,8 +1,9 @@
 #include "kincal/model.h"
 
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
+
+#include "kincal/text.h"
 
 namespace kincal {
 
@@ -44,15 +45,10 @@ std::string ParamNames(const std::vector<ParamInfo>& params) {
 }
 
 std::string ParamValueProblem(const ParamInfo& p, double v) {
-  const auto text = [](double x) {
-    std::ostringstream s;
-    s << x;
-    return s.str();
-  };
-  if (!std::isfinite(v)) return "'" + p.name + "' must be a finite number, not " + text(v);
+  if (!std::isfinite(v)) return "'" + p.name + "' must be a finite number, not " + ShortNumber(v);
   if (v < p.min_value) {
-    return "'" + p.name + "' must be >= " + text(p.min_value) + " " + p.unit +
-           " (its physical bound), not " + text(v);
+    return "'" + p.name + "' must be >= " + ShortNumber(p.min_value) + " " + p.unit +
+           " (its physical bound), not " + ShortNumber(v);
   }
   return "";
 }

@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <sstream>
 #include <utility>
 
 namespace kincal {
@@ -120,6 +121,7 @@ bool TextLines::Next(std::string* line) {
       break;
     }
     if (line->size() >= max_line_bytes_) {
+      line_too_long_ = true;
       return Fail(where() + ": line longer than " + std::to_string(max_line_bytes_) +
                   " bytes: not a text file of this kind");
     }
@@ -160,26 +162,26 @@ std::string Escaped(std::string_view text) {
   return out;
 }
 
+std::string ShortNumber(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
 StatusOr<std::string> ReadTextFile(const std::string& path, std::string_view what,
                                    size_t max_bytes) {
   TextLines lines(path, what, max_bytes);
   std::string text, line;
-  while (lines.Next(&line)) {
+  while (text.size() <= max_bytes && lines.Next(&line)) {
     text += line;
     text += '\n';
-    if (text.size() > max_bytes) {
-      return Status::Error(path + ": " + std::string(what) + " larger than " +
-                           std::to_string(max_bytes) + " bytes: not read");
-    }
   }
-  if (!lines.status().ok()) {
-    // One line the whole bound long is a file too large, said as such.
-    if (lines.status().message().find(": line longer than ") != std::string::npos) {
-      return Status::Error(path + ": " + std::string(what) + " larger than " +
-                           std::to_string(max_bytes) + " bytes: not read");
-    }
-    return lines.status();
+  // A line longer than the whole bound is a file too large too.
+  if (text.size() > max_bytes || lines.line_too_long()) {
+    return Status::Error(path + ": " + std::string(what) + " larger than " +
+                         std::to_string(max_bytes) + " bytes: not read");
   }
+  if (!lines.status().ok()) return lines.status();
   return text;
 }
 

@@ -15,12 +15,12 @@
 #include <iomanip>
 #include <kincal/params_t.hpp>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include "kincal/io/output_file.h"
 #include "kincal/system.h"
+#include "kincal/text.h"
 
 namespace kincal {
 
@@ -98,12 +98,6 @@ Status WriteCheckpoint(const std::string& path, const Checkpoint& c) {
 
 namespace {
 
-std::string FormatNumber(double v) {
-  std::ostringstream o;
-  o << std::setprecision(6) << v;
-  return o.str();
-}
-
 // A parameter's plausible magnitude: its generic guess or the spread of that guess.
 double Scale(const ParamInfo& p) { return std::max(std::abs(p.default_value), p.default_sigma); }
 
@@ -117,9 +111,9 @@ bool ParameterIsPlausible(const ParamInfo& p, const Checkpoint& c, int k, bool h
   const double value = c.values[static_cast<size_t>(k)];
   const double limit = kCheckpointMaxScale * Scale(p);
   if (!std::isfinite(value) || std::abs(value) > limit || value < p.min_value) {
-    *error = "value of '" + p.name + "' (" + FormatNumber(value) + " " + p.unit +
-             ") is not plausible: expected a finite value within +-" + FormatNumber(limit) +
-             (std::isfinite(p.min_value) ? " and >= " + FormatNumber(p.min_value) : "");
+    *error = "value of '" + p.name + "' (" + ShortNumber(value) + " " + p.unit +
+             ") is not plausible: expected a finite value within +-" + ShortNumber(limit) +
+             (std::isfinite(p.min_value) ? " and >= " + ShortNumber(p.min_value) : "");
     return false;
   }
   const double var = c.covariance(k, k);
@@ -132,9 +126,9 @@ bool ParameterIsPlausible(const ParamInfo& p, const Checkpoint& c, int k, bool h
   }
   const double min_sigma = kCheckpointMinSigmaFraction * p.default_sigma;
   if (!(var >= min_sigma * min_sigma) || !(std::sqrt(var) <= limit)) {
-    *error = "variance of '" + p.name + "' (" + FormatNumber(var) +
-             ") is not plausible: expected a sigma between " + FormatNumber(min_sigma) + " and " +
-             FormatNumber(limit) + " " + p.unit;
+    *error = "variance of '" + p.name + "' (" + ShortNumber(var) +
+             ") is not plausible: expected a sigma between " + ShortNumber(min_sigma) + " and " +
+             ShortNumber(limit) + " " + p.unit;
     return false;
   }
   return true;

@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "kincal/angles.h"
+#include "kincal/text.h"
 #include "plan/fleet.h"
 #include "plan/greedy.h"
 #include "plan/judged_design.h"
@@ -334,11 +335,10 @@ Status PlanMotion(const System& sys, const Eigen::VectorXd& params,
     ok = plan_internal::DesignSegments(sys, ws, o, grid, prior_sigma, left, false, &d);
   }
   if (!ok) {
-    std::ostringstream when;
-    if (d.t_s > 0.0) when << " after " << d.t_s << " s";
+    const std::string when =
+        d.t_s > 0.0 ? " after " + ShortNumber(d.t_s) + " s" : " from the start";
     return Status::Error("plan: no control keeps every robot within the prior inside the " +
-                         ws.Describe() + (d.t_s > 0.0 ? when.str() : " from the start") +
-                         "; widen the workspace or lower the speed limits");
+                         ws.Describe() + when + "; widen the workspace or lower the speed limits");
   }
   plan->name = "plan";
   plan->controls = std::move(d.u);
