@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <cstring>
 #include <map>
 #include <sstream>
 
@@ -56,8 +55,8 @@ std::string Trim(std::string s) {
   return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
 }
 
-std::vector<std::string> Split(const std::string& s, bool whitespace) {
-  if (!whitespace) return SplitCsvFields(s);
+// The whitespace-separated tokens of an MR.CLAM line.
+std::vector<std::string> SplitWhitespace(const std::string& s) {
   std::vector<std::string> out;
   std::istringstream in(s);
   std::string tok;
@@ -145,7 +144,7 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     const int n = lines.number();
     line = Trim(line);
     if (line.empty() || line[0] == '#') continue;
-    const auto cols = Split(line, false);
+    const auto cols = SplitCsvFields(line);
     const std::string where = path + ":" + std::to_string(n);
     if (order.empty()) {
       order = HeaderOrder(cols, wanted, where, &run_col);
@@ -183,7 +182,7 @@ std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
       ++*comments;
       continue;
     }
-    const auto cols = Split(line, true);
+    const auto cols = SplitWhitespace(line);
     const std::string where = path + ":" + std::to_string(n);
     if (static_cast<int>(cols.size()) != columns) {
       throw ReadError(where + ": expected " + std::to_string(columns) + " values, found " +
