@@ -58,6 +58,7 @@ struct AnalyzeArgs {
   double counts_per_rev = 0.0;
   std::vector<std::string> controls, poses, log;  // repeated: one run (or more) each
   int robot = 0;
+  RecordingLimits limits;
   AnalyzeOptions opt;
 };
 
@@ -102,11 +103,12 @@ StatusOr<Recording> ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
         " --controls, " + std::to_string(a.poses.size()) + " --poses");
   }
   std::vector<StatusOr<Recording>> read;
-  if (!a.mrclam.empty()) read.push_back(ReadMrclam(a.mrclam, a.robot));
-  for (const auto& log : a.log) read.push_back(ReadLcmLog(log, *model));
-  for (size_t k = 0; k < a.controls.size(); ++k)
-    read.push_back(
-        ReadCsvRecording(a.controls[k], a.poses[k], *model, a.controls_kind == "position"));
+  if (!a.mrclam.empty()) read.push_back(ReadMrclam(a.mrclam, a.robot, a.limits));
+  for (const auto& log : a.log) read.push_back(ReadLcmLog(log, *model, a.limits));
+  for (size_t k = 0; k < a.controls.size(); ++k) {
+    read.push_back(ReadCsvRecording(a.controls[k], a.poses[k], *model,
+                                    a.controls_kind == "position", a.limits));
+  }
   std::vector<Recording> parts;
   for (auto& r : read) {
     if (!r.ok()) return r.status();
@@ -227,6 +229,11 @@ Command AddAnalyze(CLI::App& app) {
       ->check(AtLeastZero());
   app.add_option("--heldout-runs", a->heldout_runs,
                  "runs held out (1-based, e.g. 3,6,9; default: every third run)");
+  app.add_option("--max-rows", a->limits.max_rows,
+                 "the most lines read from one file (or samples on one channel of a log): a "
+                 "recording is held in memory whole, and this bounds it")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");
   app.add_option("--robot", a->robot, "MR.CLAM robot number");
   app.add_option("--out", a->out, "output directory")->required();

@@ -21,15 +21,19 @@ inline constexpr std::string_view kUtf8Bom = "\xEF\xBB\xBF";
 // The longest line of a line-by-line text file (a CSV, a points file, an MR.CLAM .dat).
 inline constexpr size_t kMaxTextLineBytes = size_t{1} << 16;
 
+// The most lines read from one such file. Past it reading ends with an error, so a file
+// that never ends (a pipe, `yes 0,0,0,0`) runs out neither the memory nor the time.
+inline constexpr int kMaxTextLines = 5'000'000;
+
 // A text file's lines one at a time. Lines come without their ending, the first without a
 // byte-order mark, UTF-16 decoded to UTF-8. Errors (a file that cannot be opened, a line
-// longer than the bound, UTF-32, a broken UTF-16 surrogate) name the file and the line,
-// and end the lines.
+// longer than the bound, more lines than the bound, UTF-32, a broken UTF-16 surrogate)
+// name the file and the line, and end the lines.
 class TextLines {
  public:
   // `what` names the file in errors ("poses CSV": "p.csv: cannot open poses CSV: ...").
   TextLines(const std::string& path, std::string_view what,
-            size_t max_line_bytes = kMaxTextLineBytes);
+            size_t max_line_bytes = kMaxTextLineBytes, int max_lines = kMaxTextLines);
 
   // The next line into *line; false at the end of the file or on an error (status()).
   bool Next(std::string* line);
@@ -39,6 +43,8 @@ class TextLines {
   int line_number() const { return line_number_; }
   // The lines ended at a line longer than the bound (status() says where).
   bool line_too_long() const { return line_too_long_; }
+  // The lines ended because the file holds more than `max_lines` of them.
+  bool too_many_lines() const { return too_many_lines_; }
 
  private:
   enum class Encoding { kUtf8, kUtf16Le, kUtf16Be };
@@ -52,6 +58,7 @@ class TextLines {
   std::string path_;
   std::ifstream in_;
   size_t max_line_bytes_;
+  int max_lines_;
   Encoding encoding_ = Encoding::kUtf8;
   char head_[4] = {};  // the first bytes, read to look for a byte-order mark
   size_t head_size_ = 0;
@@ -60,6 +67,7 @@ class TextLines {
   Status status_;
   int line_number_ = 0;
   bool line_too_long_ = false;
+  bool too_many_lines_ = false;
 };
 
 // `text` with what a terminal would not show written out: \r, \n, \t, \\, and other control

@@ -16,8 +16,9 @@ constexpr int32_t kNone = -3;
 
 }  // namespace
 
-TextLines::TextLines(const std::string& path, std::string_view what, size_t max_line_bytes)
-    : path_(path), max_line_bytes_(max_line_bytes) {
+TextLines::TextLines(const std::string& path, std::string_view what, size_t max_line_bytes,
+                     int max_lines)
+    : path_(path), max_line_bytes_(max_line_bytes), max_lines_(max_lines) {
   const std::string cannot = path + ": cannot open " + std::string(what) + ": ";
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) {
@@ -55,10 +56,10 @@ void TextLines::DetectEncoding() {
   size_t mark = 0;
   if (head.substr(0, 3) == kUtf8Bom) {
     mark = 3;
-  } else if (head == std::string_view("\xFF\xFE\0\0", 4)) {
-    Fail(path_ +
-         ": the file is UTF-32 text (its byte-order mark is \\xFF\\xFE\\x00\\x00): "
-         "save it as UTF-8 or UTF-16");
+  } else if (head == std::string_view("\xFF\xFE\0\0", 4) ||
+             head == std::string_view("\0\0\xFE\xFF", 4)) {
+    Fail(path_ + ": the file is UTF-32 text (its byte-order mark is " + Escaped(head) +
+         "): save it as UTF-8 or UTF-16");
   } else if (head.substr(0, 2) == "\xFF\xFE") {
     encoding_ = Encoding::kUtf16Le;
     mark = 2;
@@ -112,6 +113,11 @@ bool TextLines::Next(std::string* line) {
   const auto where = [&] { return path_ + ":" + std::to_string(line_number_ + 1); };
   int32_t cp = NextCodePoint();
   if (cp == kEnd) return false;
+  if (line_number_ >= max_lines_) {
+    too_many_lines_ = true;
+    return Fail(path_ + ": more than " + std::to_string(max_lines_) +
+                " lines, the most read from one file");
+  }
   for (; cp != kEnd; cp = NextCodePoint()) {
     if (cp == kBadSurrogate) return Fail(where() + ": broken UTF-16 text (an unpaired surrogate)");
     if (cp == '\n') break;

@@ -12,6 +12,7 @@
 #include "kincal/io/lcm_guard.h"
 #include "kincal/io/lcm_log_reader.h"
 #include "kincal/io/recording.h"
+#include "repeated_times.h"
 
 namespace kincal {
 
@@ -29,8 +30,13 @@ constexpr const char* kRunChannel = "KINCAL_RUN";
 struct TimedControls {
   double t;  // s, the message's utime
   std::vector<double> v;
+  int64_t event = 0;  // its number in the log
 };
-using TimedPose = std::pair<double, Eigen::Vector3d>;
+struct TimedPose {
+  double t;  // s, the message's utime
+  Eigen::Vector3d z;
+  int64_t event = 0;
+};
 
 // One controls_t event as the model's control vector; throws naming `where` and the fault.
 TimedControls DecodeControls(const LcmLogEvent& ev, const std::string& where,
@@ -61,7 +67,7 @@ TimedControls DecodeControls(const LcmLogEvent& ev, const std::string& where,
   for (size_t k = 0; k < seen.size(); ++k) {
     if (!seen[k]) throw ReadError(where + ": control '" + model.controls()[k].name + "' missing");
   }
-  return {static_cast<double>(m.utime) * 1e-6, std::move(v)};
+  return {static_cast<double>(m.utime) * 1e-6, std::move(v), ev.eventnum};
 }
 
 // One pose_t event; nothing for a pose marked invalid. Throws naming `where`.
@@ -73,7 +79,7 @@ std::optional<TimedPose> DecodePose(const LcmLogEvent& ev, const std::string& wh
   if (!m.valid) return std::nullopt;
   const Eigen::Vector3d z(m.x, m.y, m.theta);
   if (!z.allFinite()) throw ReadError(where + ": pose is not finite");
-  return TimedPose{static_cast<double>(m.utime) * 1e-6, z};
+  return TimedPose{static_cast<double>(m.utime) * 1e-6, z, ev.eventnum};
 }
 
 // One run_t event: the run's start (s, its utime) and source. Throws naming `where`.
@@ -105,40 +111,59 @@ void PlaceRuns(const std::vector<std::pair<double, RecordingRun>>& runs, const s
 }
 
 // The streams (in arrival order) as a recording: each sorted by its own stamps (stable),
-// times from the earlier first sample, repeated stamps counted.
+// times from the earlier first sample, repeated stamps counted (and said when their values
+// differ). `channels`: the controls' and the poses'.
 Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> poses,
-                   const KinematicModel& model, const std::string& path) {
+                   const KinematicModel& model, const std::string& path,
+                   const std::pair<std::string, std::string>& channels) {
   std::stable_sort(controls.begin(), controls.end(),
                    [](const TimedControls& a, const TimedControls& b) { return a.t < b.t; });
   std::stable_sort(poses.begin(), poses.end(),
-                   [](const auto& a, const auto& b) { return a.first < b.first; });
+                   [](const TimedPose& a, const TimedPose& b) { return a.t < b.t; });
   Recording rec;
   rec.source = path;
-  rec.origin_s = std::min(controls.front().t, poses.front().first);
+  rec.origin_s = std::min(controls.front().t, poses.front().t);
   rec.controls = ControlSignal(model.num_controls(), 0);
   RecordingStats stats;
+  ConflictingRepeats control_conflicts(path + " " + channels.first, "event");
+  ConflictingRepeats pose_conflicts(path + " " + channels.second, "event");
   for (const auto& c : controls) {
     const size_t before = rec.controls.size();
     rec.controls.Append(SecondsToNs(c.t - rec.origin_s), c.v);
     if (rec.controls.size() == before) ++stats.control_repeated_times;
+    control_conflicts.Add(SecondsToNs(c.t - rec.origin_s), c.v, c.event);
   }
-  for (const auto& [t, z] : poses) {
-    RecordedPose s{SecondsToNs(t - rec.origin_s), Eigen::Vector3d(z.x(), z.y(), WrapAngle(z.z()))};
+  for (const TimedPose& p : poses) {
+    const Eigen::Vector3d& z = p.z;
+    RecordedPose s{SecondsToNs(p.t - rec.origin_s),
+                   Eigen::Vector3d(z.x(), z.y(), WrapAngle(z.z()))};
     if (!rec.poses.empty() && rec.poses.back().t_ns == s.t_ns) {
       rec.poses.back() = s;
       ++stats.pose_repeated_times;
     } else {
       rec.poses.push_back(s);
     }
+    pose_conflicts.Add(s.t_ns, std::span<const double>(z.data(), 3), p.event);
   }
+  for (const auto* c : {&control_conflicts, &pose_conflicts})
+    if (c->count() > 0) rec.warnings.push_back(c->Warning());
   stats.control_rows = static_cast<int>(controls.size());
   stats.pose_rows = static_cast<int>(poses.size());
   rec.stats = stats;
   return rec;
 }
 
+// Throws naming the log and `channel` when `samples` is past the bound.
+void CheckBound(size_t samples, int max_rows, const std::string& path, const std::string& channel) {
+  if (samples <= static_cast<size_t>(max_rows)) return;
+  throw ReadError(path + ": more than " + std::to_string(max_rows) + " samples on " + channel +
+                  ", the most read from one log (a recording is held in memory whole; kincal "
+                  "analyze --max-rows raises the bound)");
+}
+
 Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model,
-                            const std::string& controls_channel, const std::string& pose_channel) {
+                            const std::string& controls_channel, const std::string& pose_channel,
+                            int max_rows) {
   std::unique_ptr<LcmLogReader> log;
   if (const Status s = LcmLogReader::Open(path, &log); !s.ok()) throw ReadError(s.message());
   std::vector<TimedControls> controls;
@@ -150,17 +175,21 @@ Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model
                               std::to_string(ev.offset) + ")";
     if (ev.channel == controls_channel) {
       controls.push_back(DecodeControls(ev, where, model));
+      CheckBound(controls.size(), max_rows, path, controls_channel);
     } else if (ev.channel == pose_channel) {
       if (auto p = DecodePose(ev, where)) poses.push_back(*p);
+      CheckBound(poses.size(), max_rows, path, pose_channel);
     } else if (ev.channel == kRunChannel) {
       double t = 0;
       RecordingRun r = DecodeRun(ev, where, &t);
       runs.emplace_back(t, std::move(r));
+      CheckBound(runs.size(), max_rows, path, kRunChannel);
     }
   }
   if (controls.empty()) throw ReadError(path + ": no controls on channel " + controls_channel);
   if (poses.empty()) throw ReadError(path + ": no poses on channel " + pose_channel);
-  Recording rec = Assemble(std::move(controls), std::move(poses), model, path);
+  Recording rec = Assemble(std::move(controls), std::move(poses), model, path,
+                           {controls_channel, pose_channel});
   PlaceRuns(runs, path, &rec);
   // Damage is not fatal (the rest of the log is still good) but never silent.
   for (const auto& p : log->problems()) rec.warnings.push_back(p);
@@ -175,10 +204,11 @@ Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model
 }  // namespace
 
 StatusOr<Recording> ReadLcmLog(const std::string& path, const KinematicModel& model,
-                               const std::string& controls_channel,
+                               const RecordingLimits& limits, const std::string& controls_channel,
                                const std::string& pose_channel) {
+  if (std::string why; !limits.IsValid(&why)) return Status::Error(why);
   try {
-    return ReadLcmLogOrThrow(path, model, controls_channel, pose_channel);
+    return ReadLcmLogOrThrow(path, model, controls_channel, pose_channel, limits.max_rows);
   } catch (const ReadError& e) {
     return Status::Error(e.what());
   }

@@ -9,6 +9,7 @@
 #include "kincal/angles.h"
 #include "kincal/csv.h"
 #include "kincal/text.h"
+#include "repeated_times.h"
 
 namespace kincal {
 namespace {
@@ -75,9 +76,15 @@ double ParseNumber(const std::string& tok, const std::string& where, const std::
 // The lines of a text file; throws naming the file on what TextLines refuses.
 class Lines {
  public:
-  explicit Lines(const std::string& path) : lines_(path, "recording file") {}
+  Lines(const std::string& path, int max_lines)
+      : lines_(path, "recording file", kMaxTextLineBytes, max_lines) {}
   bool Next(std::string* line) {
     if (lines_.Next(line)) return true;
+    if (lines_.too_many_lines()) {
+      throw ReadError(lines_.status().message() +
+                      " (a recording is held in memory whole; kincal analyze --max-rows raises "
+                      "the bound)");
+    }
     if (!lines_.status().ok()) throw ReadError(lines_.status().message());
     return false;
   }
@@ -134,8 +141,8 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
 // Reads a CSV with a header; returns rows with columns ordered as `wanted`, and a 'run'
 // column's value when the file has one (*has_run).
 std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted,
-                         bool* has_run) {
-  Lines lines(path);
+                         int max_lines, bool* has_run) {
+  Lines lines(path, max_lines);
   std::string line;
   std::vector<int> order;
   int run_col = -1;
@@ -170,8 +177,8 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
 }
 
 // Whitespace-separated numeric rows with '#' comments (MR.CLAM .dat).
-std::vector<Row> ReadDat(const std::string& path, int columns, int* comments) {
-  Lines lines(path);
+std::vector<Row> ReadDat(const std::string& path, int columns, int max_lines, int* comments) {
+  Lines lines(path, max_lines);
   std::string line;
   std::vector<Row> rows;
   while (lines.Next(&line)) {
@@ -259,10 +266,12 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
   }
   auto to_ns = [&](double t) { return SecondsToNs(t - rec.origin_s); };
   rec.controls = ControlSignal(num_controls, 0);
+  ConflictingRepeats control_conflicts(cpath, "line"), pose_conflicts(ppath, "line");
   for (const auto& r : controls) {
     const size_t before = rec.controls.size();
     rec.controls.Append(to_ns(r.t), r.v);
     if (rec.controls.size() == before) ++rec.stats.control_repeated_times;
+    control_conflicts.Add(to_ns(r.t), r.v, r.line);
   }
   rec.stats.control_rows = static_cast<int>(controls.size());
   rec.stats.pose_rows = static_cast<int>(poses.size());
@@ -282,7 +291,10 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
     } else {
       rec.poses.push_back(s);
     }
+    pose_conflicts.Add(s.t_ns, r.v, r.line);
   }
+  for (const auto* c : {&control_conflicts, &pose_conflicts})
+    if (c->count() > 0) rec.warnings.push_back(c->Warning());
   return rec;
 }
 
@@ -337,12 +349,12 @@ void WarnOfSteeringInDegrees(const std::vector<Row>& controls, const KinematicMo
 }
 
 Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& poses_csv,
-                         const KinematicModel& model, bool positions) {
+                         const KinematicModel& model, bool positions, int max_lines) {
   std::vector<std::string> names;
   for (const auto& c : model.controls()) names.push_back(c.name);
   bool control_runs = false, pose_runs = false;
-  const auto controls = ReadCsv(controls_csv, names, &control_runs);
-  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"}, &pose_runs);
+  const auto controls = ReadCsv(controls_csv, names, max_lines, &control_runs);
+  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"}, max_lines, &pose_runs);
   std::vector<double> limits;
   std::vector<const char*> expected;
   for (const auto& c : model.controls()) {
@@ -366,12 +378,12 @@ Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& pos
   return rec;
 }
 
-Recording ReadMrclamOrThrow(const std::string& dir, int robot) {
+Recording ReadMrclamOrThrow(const std::string& dir, int robot, int max_lines) {
   if (robot < 1) throw ReadError("MR.CLAM robot number must be >= 1");
   const std::string base = dir + "/Robot" + std::to_string(robot);
   int comments = 0;
-  const auto odo = ReadDat(base + "_Odometry.dat", 3, &comments);
-  const auto gt = ReadDat(base + "_Groundtruth.dat", 4, &comments);
+  const auto odo = ReadDat(base + "_Odometry.dat", 3, max_lines, &comments);
+  const auto gt = ReadDat(base + "_Groundtruth.dat", 4, max_lines, &comments);
   CheckRanges(odo, base + "_Odometry.dat", {"v", "omega"},
               {PlausibleControlLimit("m/s"), PlausibleControlLimit("rad/s")}, {"m/s", "rad/s"});
   CheckRanges(gt, base + "_Groundtruth.dat", {"x", "y", "theta"},
@@ -384,13 +396,23 @@ Recording ReadMrclamOrThrow(const std::string& dir, int robot) {
 
 }  // namespace
 
-StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
-                                     const KinematicModel& model, bool positions) {
-  return Catching([&] { return ReadCsvOrThrow(controls_csv, poses_csv, model, positions); });
+bool RecordingLimits::IsValid(std::string* why) const {
+  if (max_rows >= 1) return true;
+  if (why) *why = "max_rows " + std::to_string(max_rows) + ": expected 1 or more";
+  return false;
 }
 
-StatusOr<Recording> ReadMrclam(const std::string& dir, int robot) {
-  return Catching([&] { return ReadMrclamOrThrow(dir, robot); });
+StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
+                                     const KinematicModel& model, bool positions,
+                                     const RecordingLimits& limits) {
+  if (std::string why; !limits.IsValid(&why)) return Status::Error(why);
+  return Catching(
+      [&] { return ReadCsvOrThrow(controls_csv, poses_csv, model, positions, limits.max_rows); });
+}
+
+StatusOr<Recording> ReadMrclam(const std::string& dir, int robot, const RecordingLimits& limits) {
+  if (std::string why; !limits.IsValid(&why)) return Status::Error(why);
+  return Catching([&] { return ReadMrclamOrThrow(dir, robot, limits.max_rows); });
 }
 
 int RunOf(const Recording& rec, TimeNs t_ns) {

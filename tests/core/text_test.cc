@@ -16,13 +16,14 @@ namespace {
 
 // The lines of a file written with `bytes`, or the error that ended them.
 std::vector<std::string> LinesOf(const std::string& bytes, std::string* error = nullptr,
-                                 size_t max_line_bytes = kMaxTextLineBytes) {
+                                 size_t max_line_bytes = kMaxTextLineBytes,
+                                 int max_lines = kMaxTextLines) {
   const std::string path = testing::TempPath("text_test_lines.txt");
   {
     std::ofstream out(path, std::ios::binary);
     out << bytes;
   }
-  TextLines lines(path, "test file", max_line_bytes);
+  TextLines lines(path, "test file", max_line_bytes, max_lines);
   std::vector<std::string> out;
   std::string line;
   while (lines.Next(&line)) out.push_back(line);
@@ -73,7 +74,13 @@ TEST(Text, Utf16IsReadAsUtf8) {
   LinesOf(utf16(u"ok\n", true) + std::string("\x00\xDC", 2), &error);  // a low surrogate alone
   EXPECT_NE(error.find("text_test_lines.txt:2: broken UTF-16 text"), std::string::npos) << error;
   LinesOf(std::string("\xFF\xFE\0\0t\0\0\0", 8), &error);
-  EXPECT_NE(error.find("the file is UTF-32 text"), std::string::npos) << error;
+  EXPECT_NE(error.find("the file is UTF-32 text (its byte-order mark is \\xFF\\xFE\\x00\\x00)"),
+            std::string::npos)
+      << error;
+  LinesOf(std::string("\0\0\xFE\xFF\0\0\0t", 8), &error);  // big-endian
+  EXPECT_NE(error.find("the file is UTF-32 text (its byte-order mark is \\x00\\x00\\xFE\\xFF)"),
+            std::string::npos)
+      << error;
 }
 
 TEST(Text, ALineLongerThanTheBoundEndsTheLines) {
@@ -83,6 +90,20 @@ TEST(Text, ALineLongerThanTheBoundEndsTheLines) {
       << error;
   EXPECT_EQ(LinesOf(std::string(64, 'x'), &error, 64), (Lines{std::string(64, 'x')}));
   EXPECT_EQ(error, "");
+}
+
+// A file of endless short lines (`yes 0,0,0,0 |`) would grow a reader's rows until it was
+// killed: the number of lines is bounded too, and a file of exactly that many is whole.
+TEST(Text, MoreLinesThanTheBoundEndTheLines) {
+  std::string error;
+  EXPECT_EQ(LinesOf("a\nb\r\nc\n", &error, kMaxTextLineBytes, 3), (Lines{"a", "b", "c"}));
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(LinesOf("a\nb\nc", &error, kMaxTextLineBytes, 3), (Lines{"a", "b", "c"}));
+  EXPECT_EQ(error, "");
+  EXPECT_EQ(LinesOf("a\nb\nc\n\n", &error, kMaxTextLineBytes, 3), (Lines{"a", "b", "c"}));
+  EXPECT_NE(error.find("text_test_lines.txt: more than 3 lines, the most read from one file"),
+            std::string::npos)
+      << error;
 }
 
 // Issue 34's sweep: `camcal --points /dev/zero` grew to 11.8 GB in 30 s: a file that never

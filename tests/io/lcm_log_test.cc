@@ -17,11 +17,13 @@ namespace {
 using testing::PutMessage;
 class LcmLog : public testing::IoTest {};
 
-TEST_F(LcmLog, ReadsBack) {
-  const std::string path = (dir_ / "run.lcm").string();
+// Five controls and five poses, one every 0.1 s from 1 s; `repeat`: then a sixth pose at the
+// third's time, 9 m away.
+std::string FiveOfEach(const std::filesystem::path& dir, bool repeat = false) {
+  const std::string path = (dir / "run.lcm").string();
   {
     lcm::LogFile log(path, "w");
-    ASSERT_TRUE(log.good());
+    EXPECT_TRUE(log.good());
     for (int k = 0; k < 5; ++k) {
       kincal::controls_t c{};
       c.schema_version = 1;
@@ -38,7 +40,20 @@ TEST_F(LcmLog, ReadsBack) {
       p.valid = 1;
       PutMessage(log, "KINCAL_POSE", p, p.utime);
     }
+    if (repeat) {
+      kincal::pose_t p{};
+      p.schema_version = 1;
+      p.utime = 1'250'000;
+      p.x = 9;
+      p.valid = 1;
+      PutMessage(log, "KINCAL_POSE", p, p.utime);
+    }
   }
+  return path;
+}
+
+TEST_F(LcmLog, ReadsBack) {
+  const std::string path = FiveOfEach(dir_);
   const Recording r = ReadLcmLog(path, *MakeModel("unicycle").value()).value();
   EXPECT_EQ(r.controls.size(), 5u);
   EXPECT_EQ(r.poses.size(), 5u);
@@ -51,6 +66,37 @@ TEST_F(LcmLog, ReadsBack) {
   ASSERT_FALSE(none.ok());
   EXPECT_EQ(none.status().message(),
             missing + ": cannot open the LCM log: No such file or directory");
+}
+
+// A log is held in memory whole: samples past the configured bound on either channel are
+// refused, naming the log and the channel.
+TEST_F(LcmLog, MoreSamplesThanTheBoundAreRefused) {
+  const std::string path = FiveOfEach(dir_);
+  const auto model = MakeModel("unicycle").value();
+  RecordingLimits limits;
+  limits.max_rows = 5;
+  EXPECT_TRUE(ReadLcmLog(path, *model, limits).ok());
+  limits.max_rows = 4;
+  EXPECT_EQ(ReadLcmLog(path, *model, limits).status().message(),
+            path +
+                ": more than 4 samples on KINCAL_CONTROLS, the most read from one log (a "
+                "recording is held in memory whole; kincal analyze --max-rows raises the bound)");
+  limits.max_rows = -1;
+  EXPECT_EQ(ReadLcmLog(path, *model, limits).status().message(), "max_rows -1: expected 1 or more");
+}
+
+// Two poses at one time, 9 m apart (two publishers on one channel): the later is kept, as
+// at every repeated time, and said.
+TEST_F(LcmLog, RepeatedTimesWithOtherValuesAreSaid) {
+  const Recording r = ReadLcmLog(FiveOfEach(dir_, true), *MakeModel("unicycle").value()).value();
+  EXPECT_EQ(r.stats.pose_repeated_times, 1);
+  EXPECT_NEAR(r.poses[2].z.x(), 9.0, 1e-12);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("run.lcm KINCAL_POSE: event 10 repeats the time of event 5 (0.25 "
+                               "s from the start) with other values (9,0,0 against 0.1,0,0)"),
+            std::string::npos)
+      << r.warnings[0];
+  EXPECT_TRUE(ReadLcmLog(FiveOfEach(dir_), *MakeModel("unicycle").value())->warnings.empty());
 }
 
 TEST_F(LcmLog, DamagedIsReadWithWarnings) {

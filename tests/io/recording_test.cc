@@ -157,6 +157,38 @@ TEST_F(RecordingCsv, DirectoriesAndEndlessLinesAreNamed) {
   EXPECT_NE(e.find("/dev/zero:1: line longer than 65536 bytes"), std::string::npos) << e;
 }
 
+// A recording is held in memory whole: a file of endless valid lines (`yes 0,0,0,0 |`) grew
+// until it was killed. Reading stops at the configured bound, naming the file and how to
+// raise it; a file of exactly that many lines is read.
+TEST_F(RecordingCsv, MoreLinesThanTheBoundAreRefused) {
+  const auto model = MakeModel("unicycle").value();
+  RecordingLimits limits;
+  limits.max_rows = 4;  // kPoses: a header and three rows
+  const std::string poses = Write("p.csv", kPoses);
+  const std::string controls = Write("c.csv", "t,v,omega\n0,1,0\n1,1,0\n2,1,0\n");
+  EXPECT_TRUE(ReadCsvRecording(controls, poses, *model, false, limits).ok());
+  limits.max_rows = 3;
+  const std::string e = ReadCsvRecording(controls, poses, *model, false, limits).status().message();
+  EXPECT_EQ(e, controls +
+                   ": more than 3 lines, the most read from one file (a recording is held in "
+                   "memory whole; kincal analyze --max-rows raises the bound)");
+  Write("Robot1_Odometry.dat", "# t v w\n0 1 0\n1 1 0\n2 1 0\n");
+  Write("Robot1_Groundtruth.dat", "0 0 0 0\n1 1 0 0\n2 2 0 0\n");
+  limits.max_rows = 4;
+  EXPECT_TRUE(ReadMrclam(dir_.string(), 1, limits).ok());  // a comment is a line too
+  limits.max_rows = 3;
+  EXPECT_NE(ReadMrclam(dir_.string(), 1, limits)
+                .status()
+                .message()
+                .find("Robot1_Odometry.dat: more than 3 lines"),
+            std::string::npos);
+  limits.max_rows = 0;
+  EXPECT_EQ(ReadCsvRecording(controls, poses, *model, false, limits).status().message(),
+            "max_rows 0: expected 1 or more");
+  EXPECT_EQ(ReadMrclam(dir_.string(), 1, limits).status().message(),
+            "max_rows 0: expected 1 or more");
+}
+
 TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
                                        Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),
@@ -168,6 +200,21 @@ TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   EXPECT_EQ(r.controls.At(0.5)[1], 0.5);  // omega
   EXPECT_EQ(r.poses.size(), 2u);
   EXPECT_NEAR(r.poses[0].z.z(), 0.1, 1e-15);
+  // Both repeats carry other values than the row before them: said, not only counted
+  // (a 0.5 m jump at one time was once a silent "1 repeated time").
+  ASSERT_EQ(r.warnings.size(), 2u);
+  EXPECT_NE(r.warnings[0].find("c.csv: line 3 repeats the time of line 2 (0 s from the start) "
+                               "with other values (2,0.5 against 1,0)"),
+            std::string::npos)
+      << r.warnings[0];
+  EXPECT_NE(r.warnings[1].find("p.csv: line 3 repeats the time of line 2"), std::string::npos)
+      << r.warnings[1];
+  // The same row twice is a copy: counted, not said.
+  const Recording copies = ReadCsvRecording(Write("c.csv", "t,v,omega\n0,1,0\n0,1,0\n1,1,0\n"),
+                                            Write("p.csv", kPoses), *MakeModel("unicycle").value())
+                               .value();
+  EXPECT_EQ(copies.stats.control_repeated_times, 1);
+  EXPECT_TRUE(copies.warnings.empty());
 }
 
 TEST_F(RecordingCsv, HeadingInDegreesIsFlagged) {

@@ -3,7 +3,8 @@
 // Readers for the formats kincal accepts. Every reader returns bad input as an error Status
 // naming the file, the line (or LCM event) and what was expected; nothing
 // is silently dropped: repeated timestamps, reordered rows and skipped rows are counted in
-// RecordingStats and reported by the caller.
+// RecordingStats and reported by the caller, and a repeated timestamp whose values differ
+// from the sample before it is a warning too.
 //
 // Time: files carry seconds on any epoch; on reading, times become int64 ns relative to
 // the recording's origin (the earliest time in either stream), stored in `origin_s`.
@@ -16,6 +17,7 @@
 #include "kincal/control_signal.h"
 #include "kincal/model.h"
 #include "kincal/status.h"
+#include "kincal/text.h"
 
 namespace kincal {
 
@@ -52,6 +54,14 @@ struct Recording {
   std::vector<RecordingRun> runs;
 };
 
+// How much of a recording is read. A recording is held in memory whole, so memory is
+// bounded by this, not by the input: a file (a CSV, an MR.CLAM .dat) of more lines, or a
+// log with more samples on either channel, is refused with an error naming it.
+struct RecordingLimits {
+  int max_rows = kMaxTextLines;  // 5 000 000: 14 h of poses at 100 Hz
+  bool IsValid(std::string* why) const;
+};
+
 // The index of the run holding time t_ns (0 when the recording is one run).
 int RunOf(const Recording& rec, TimeNs t_ns);
 
@@ -80,16 +90,19 @@ Status PositionsToRates(double counts_per_rev, Recording* rec);
 // positions (encoder counts or angles, PositionsToRates), not checked against the
 // plausible range of the model's rates.
 StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
-                                     const KinematicModel& model, bool positions = false);
+                                     const KinematicModel& model, bool positions = false,
+                                     const RecordingLimits& limits = {});
 
 // UTIAS MR.CLAM: DIR/RobotN_Odometry.dat (t v omega) and DIR/RobotN_Groundtruth.dat
 // (t x y theta); '#' starts a comment. Controls are the unicycle model's (v, omega).
-StatusOr<Recording> ReadMrclam(const std::string& dir, int robot);
+StatusOr<Recording> ReadMrclam(const std::string& dir, int robot,
+                               const RecordingLimits& limits = {});
 
 // A kincald recording (LCM event log): kincal.controls_t on `controls_channel` and
 // kincal.pose_t on `pose_channel` (times from their utime fields); kincal.run_t on
 // KINCAL_RUN (written by `kincal import` of several bags) marks where each run starts.
 StatusOr<Recording> ReadLcmLog(const std::string& path, const KinematicModel& model,
+                               const RecordingLimits& limits = {},
                                const std::string& controls_channel = "KINCAL_CONTROLS",
                                const std::string& pose_channel = "KINCAL_POSE");
 
