@@ -121,7 +121,11 @@ StatusOr<Recording> ReadInput(const AnalyzeArgs& a, const AnalyzeOptions& o) {
   }
   std::cerr << "read " << rec->source << ": " << rec->stats.control_rows << " control rows ("
             << rec->stats.control_repeated_times << " repeated times), " << rec->stats.pose_rows
-            << " pose rows (" << rec->stats.pose_repeated_times << " repeated times)\n";
+            << " pose rows (" << rec->stats.pose_repeated_times << " repeated times"
+            << (rec->stats.pose_rows_lost > 0
+                    ? ", " + std::to_string(rec->stats.pose_rows_lost) + " without a pose, skipped"
+                    : std::string())
+            << ")\n";
   return rec;
 }
 

@@ -251,7 +251,8 @@ Status WriteAnalysisReport(const AnalyzeResult& r, const std::string& dir) {
   j["input"] = {{"control_rows", r.stats.control_rows},
                 {"pose_rows", r.stats.pose_rows},
                 {"control_repeated_times", r.stats.control_repeated_times},
-                {"pose_repeated_times", r.stats.pose_repeated_times}};
+                {"pose_repeated_times", r.stats.pose_repeated_times},
+                {"pose_rows_lost", r.stats.pose_rows_lost}};
   std::ostringstream csv;
   csv << "step,t_s,heldout,along_m,cross_m,heading_rad\n" << std::setprecision(9);
   for (const auto& [step, pts] : r.residual_steps) {

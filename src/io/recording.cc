@@ -9,6 +9,7 @@
 #include "kincal/angles.h"
 #include "kincal/csv.h"
 #include "kincal/text.h"
+#include "lost_poses.h"
 #include "repeated_times.h"
 
 namespace kincal {
@@ -138,10 +139,18 @@ std::vector<int> HeaderOrder(const std::vector<std::string>& cols,
   return order;
 }
 
+// Whether every value column (after 't') of a row is missing (IsMissingValue).
+bool NoValues(const std::vector<std::string>& cols, const std::vector<int>& order) {
+  for (size_t k = 1; k < order.size(); ++k)
+    if (!IsMissingValue(cols[static_cast<size_t>(order[k])])) return false;
+  return true;
+}
+
 // Reads a CSV with a header; returns rows with columns ordered as `wanted`, and a 'run'
-// column's value when the file has one (*has_run).
+// column's value when the file has one (*has_run). With `lost`, a row whose values are all
+// missing is skipped and counted there.
 std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>& wanted,
-                         int max_lines, bool* has_run) {
+                         int max_lines, bool* has_run, LostPoses* lost = nullptr) {
   Lines lines(path, max_lines);
   std::string line;
   std::vector<int> order;
@@ -164,6 +173,11 @@ std::vector<Row> ReadCsv(const std::string& path, const std::vector<std::string>
     }
     Row r{n, 0.0, {}};
     r.t = ParseNumber(cols[static_cast<size_t>(order[0])], where, "column 't'");
+    if (lost && NoValues(cols, order)) {
+      lost->Lost();
+      continue;
+    }
+    if (lost) lost->Kept(r.t, n);
     for (size_t k = 1; k < order.size(); ++k) {
       r.v.push_back(ParseNumber(cols[static_cast<size_t>(order[k])], where,
                                 "column '" + wanted[k - 1] + "'"));
@@ -354,7 +368,10 @@ Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& pos
   for (const auto& c : model.controls()) names.push_back(c.name);
   bool control_runs = false, pose_runs = false;
   const auto controls = ReadCsv(controls_csv, names, max_lines, &control_runs);
-  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"}, max_lines, &pose_runs);
+  LostPoses lost;
+  const auto poses = ReadCsv(poses_csv, {"x", "y", "theta"}, max_lines, &pose_runs, &lost);
+  if (poses.empty() && lost.rows() > 0)
+    throw ReadError(poses_csv + ": no pose rows: every row's pose is empty or NaN");
   std::vector<double> limits;
   std::vector<const char*> expected;
   for (const auto& c : model.controls()) {
@@ -375,6 +392,8 @@ Recording ReadCsvOrThrow(const std::string& controls_csv, const std::string& pos
                       : Assemble(controls_csv + " + " + poses_csv, controls, poses,
                                  model.num_controls(), controls_csv, poses_csv);
   if (!positions) WarnOfSteeringInDegrees(controls, model, controls_csv, &rec.warnings);
+  rec.stats.pose_rows_lost = lost.rows();
+  if (lost.rows() > 0) rec.warnings.push_back(lost.Warning(poses_csv));
   return rec;
 }
 

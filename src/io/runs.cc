@@ -41,6 +41,7 @@ void AppendPart(const Recording& part, TimeNs shift_ns, Recording* out) {
   const RecordingStats& s = part.stats;
   out->stats.control_rows += s.control_rows;
   out->stats.pose_rows += s.pose_rows;
+  out->stats.pose_rows_lost += s.pose_rows_lost;
   out->stats.control_repeated_times += s.control_repeated_times;
   out->stats.pose_repeated_times += s.pose_repeated_times;
   out->stats.comment_lines += s.comment_lines;

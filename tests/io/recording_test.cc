@@ -189,6 +189,39 @@ TEST_F(RecordingCsv, MoreLinesThanTheBoundAreRefused) {
             "max_rows 0: expected 1 or more");
 }
 
+// A motion-capture export leaves a frame's fields empty (Vicon, OptiTrack) or NaN (pandas)
+// while the tracker has lost the robot: each such row used to stop the read ("expected a
+// finite number, got ''"). It is no measurement: skipped, counted and said. A row with some
+// of its pose and not the rest is still an error naming the column.
+TEST_F(RecordingCsv, PoseRowsTheTrackerLostAreSkippedAndSaid) {
+  const auto model = MakeModel("unicycle").value();
+  const std::string controls = Write("c.csv", "t,v,omega\n0,1,0\n2,1,0\n");
+  const Recording r =
+      ReadCsvRecording(controls,
+                       Write("p.csv",
+                             "t,x,y,theta\n0,0,0,0\n0.5,,,\n1,NaN,NaN,nan\n1.5,1.5,0,0\n"
+                             "2,2,0,0\n"),
+                       *model)
+          .value();
+  EXPECT_EQ(r.poses.size(), 3u);
+  EXPECT_EQ(r.stats.pose_rows, 3);
+  EXPECT_EQ(r.stats.pose_rows_lost, 2);
+  EXPECT_NEAR(r.poses[1].z.x(), 1.5, 1e-12);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("p.csv: 2 rows have no pose (every pose field empty or NaN: the "
+                               "tracker lost the robot) and were skipped; the longest stretch "
+                               "without a pose is 1.5 s, from line 2 to line 5"),
+            std::string::npos)
+      << r.warnings[0];
+  EXPECT_EQ(Error("t,v,omega\n0,1,0\n", "t,x,y,theta\n0,0,0,0\n1,1,,0\n"),
+            dir_.string() + "/p.csv:3: column 'y': expected a finite number, got ''");
+  EXPECT_EQ(Error("t,v,omega\n0,1,0\n", "t,x,y,theta\n0,,,\n1,nan,nan,nan\n"),
+            dir_.string() + "/p.csv: no pose rows: every row's pose is empty or NaN");
+  // Controls have no such rows: a missing control is an error.
+  EXPECT_NE(Error("t,v,omega\n0,,\n1,1,0\n", kPoses).find("c.csv:2: column 'v'"),
+            std::string::npos);
+}
+
 TEST_F(RecordingCsv, RepeatedTimesAreCountedAndColumnOrderIsFree) {
   const Recording r = ReadCsvRecording(Write("c.csv", "omega,t,v\n0,0,1\n0.5,0,2\n0,1,3\n"),
                                        Write("p.csv", "t,theta,x,y\n0,0,0,0\n0,0.1,0,0\n1,0,1,0\n"),

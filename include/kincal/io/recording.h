@@ -32,6 +32,7 @@ struct RecordingStats {
   int pose_rows = 0;
   int control_repeated_times = 0;  // later row with the same time replaced the earlier
   int pose_repeated_times = 0;     // duplicate pose times: the later row kept
+  int pose_rows_lost = 0;          // rows with no pose (empty or NaN: the tracker lost it), skipped
   int comment_lines = 0;
 };
 
@@ -85,10 +86,11 @@ StatusOr<Recording> JoinRuns(std::vector<Recording> parts);
 Status PositionsToRates(double counts_per_rev, Recording* rec);
 
 // C.csv: header "t,<control names of the model>" (any column order, extra columns are an
-// error); P.csv: header "t,x,y,theta". Times in seconds, any epoch. An optional integer
-// `run` column in both files numbers the runs. `positions`: the controls are wheel
-// positions (encoder counts or angles, PositionsToRates), not checked against the
-// plausible range of the model's rates.
+// error); P.csv: header "t,x,y,theta", where a row whose pose is all empty or NaN (a tracker
+// that lost the robot) is skipped, counted (pose_rows_lost) and said in a warning. Times in
+// seconds, any epoch. An optional integer `run` column in both files numbers the runs.
+// `positions`: the controls are wheel positions (encoder counts or angles,
+// PositionsToRates), not checked against the plausible range of the model's rates.
 StatusOr<Recording> ReadCsvRecording(const std::string& controls_csv, const std::string& poses_csv,
                                      const KinematicModel& model, bool positions = false,
                                      const RecordingLimits& limits = {});
