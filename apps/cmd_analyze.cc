@@ -236,7 +236,7 @@ Command AddAnalyze(CLI::App& app) {
   app.add_option("--max-rows", a->limits.max_rows,
                  "the most lines read from one file (or samples on one channel of a log): a "
                  "recording is held in memory whole, and this bounds it")
-      ->check(CLI::PositiveNumber)
+      ->check(AtLeastOne())
       ->capture_default_str();
   app.add_option("--mrclam", a->mrclam, "a UTIAS MR.CLAM dataset directory (model unicycle)");
   app.add_option("--robot", a->robot, "MR.CLAM robot number");

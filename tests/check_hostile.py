@@ -65,6 +65,9 @@ bad_inputs = [
      "cannot open recording file: Is a directory"),
     ("analyze /dev/zero as poses", ["--controls", f"{sim}/controls.csv", "--poses", "/dev/zero"],
      "line longer than 65536 bytes"),
+    ("analyze --max-rows 0", csv + ["--max-rows", "0"], "--max-rows: a number >= 1 expected, not '0'"),
+    ("analyze a recording longer than --max-rows", csv + ["--max-rows", "10"],
+     "controls.csv: more than 10 lines, the most read from one file"),
 ]
 for name, args, text in bad_inputs:
     results.append(run(name, ["analyze", "--model", "unicycle"] + args + ["--out", f"{scratch}/bad"],
