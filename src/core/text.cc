@@ -1,9 +1,11 @@
 #include "kincal/text.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 #include <utility>
 
@@ -176,7 +178,10 @@ std::string ShortNumber(double v) {
 
 StatusOr<std::string> ReadTextFile(const std::string& path, std::string_view what,
                                    size_t max_bytes) {
-  TextLines lines(path, what, max_bytes);
+  // Bounded by its bytes: every line takes one at least, so no line bound is reached first.
+  const auto max_lines = static_cast<int>(
+      std::min<size_t>(max_bytes + 1, static_cast<size_t>(std::numeric_limits<int>::max())));
+  TextLines lines(path, what, max_bytes, max_lines);
   std::string text, line;
   while (text.size() <= max_bytes && lines.Next(&line)) {
     text += line;

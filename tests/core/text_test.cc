@@ -149,6 +149,20 @@ TEST(Text, ReadTextFileReadsWholeOrSaysWhyNot) {
   ASSERT_FALSE(small.ok());
   EXPECT_EQ(small.status().message(), path + ": layout larger than 1000 bytes: not read");
 
+  // A file read whole is bounded by its bytes, never by the line reader's count of lines:
+  // more blank lines than kMaxTextLines within 16 MiB are read, and past the bytes the size
+  // is what is said.
+  const std::string blank(static_cast<size_t>(kMaxTextLines) + 1, '\n');
+  {
+    std::ofstream out(path, std::ios::binary);
+    out << blank;
+  }
+  const StatusOr<std::string> lines = ReadTextFile(path, "layout");
+  ASSERT_TRUE(lines.ok()) << lines.status().message();
+  EXPECT_EQ(lines.value(), blank);
+  EXPECT_EQ(ReadTextFile(path, "layout", 100).status().message(),
+            path + ": layout larger than 100 bytes: not read");
+
   const std::string missing = testing::TempPath("text_test_missing.yaml");
   std::filesystem::remove(missing);
   const StatusOr<std::string> none = ReadTextFile(missing, "camera intrinsics");
