@@ -129,9 +129,10 @@ Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> p
   ConflictingRepeats pose_conflicts(path + " " + channels.second, "event");
   for (const auto& c : controls) {
     const size_t before = rec.controls.size();
-    rec.controls.Append(SecondsToNs(c.t - rec.origin_s), c.v);
+    const TimeNs t_ns = SecondsToNs(c.t - rec.origin_s);
+    rec.controls.Append(t_ns, c.v);
     if (rec.controls.size() == before) ++stats.control_repeated_times;
-    control_conflicts.Add(SecondsToNs(c.t - rec.origin_s), c.v, c.event);
+    control_conflicts.Add(t_ns, c.v, c.event);
   }
   for (const TimedPose& p : poses) {
     const Eigen::Vector3d& z = p.z;
@@ -157,8 +158,7 @@ Recording Assemble(std::vector<TimedControls> controls, std::vector<TimedPose> p
 void CheckBound(size_t samples, int max_rows, const std::string& path, const std::string& channel) {
   if (samples <= static_cast<size_t>(max_rows)) return;
   throw ReadError(path + ": more than " + std::to_string(max_rows) + " samples on " + channel +
-                  ", the most read from one log (a recording is held in memory whole; kincal "
-                  "analyze --max-rows raises the bound)");
+                  ", the most read from one log (" + std::string(kMaxRowsAdvice) + ")");
 }
 
 Recording ReadLcmLogOrThrow(const std::string& path, const KinematicModel& model,

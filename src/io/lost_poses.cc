@@ -1,6 +1,5 @@
 #include "lost_poses.h"
 
-#include <algorithm>
 #include <cctype>
 
 #include "kincal/text.h"
@@ -11,10 +10,8 @@ bool IsMissingValue(std::string_view field) {
   if (field.empty()) return true;
   if (field.front() == '-' || field.front() == '+') field.remove_prefix(1);
   if (field.size() != 3) return false;
-  std::string lower(field);
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return lower == "nan";
+  const auto lower = [](char c) { return std::tolower(static_cast<unsigned char>(c)); };
+  return lower(field[0]) == 'n' && lower(field[1]) == 'a' && lower(field[2]) == 'n';
 }
 
 void LostPoses::Kept(double t_s, int line) {

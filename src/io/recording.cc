@@ -82,9 +82,7 @@ class Lines {
   bool Next(std::string* line) {
     if (lines_.Next(line)) return true;
     if (lines_.too_many_lines()) {
-      throw ReadError(lines_.status().message() +
-                      " (a recording is held in memory whole; kincal analyze --max-rows raises "
-                      "the bound)");
+      throw ReadError(lines_.status().message() + " (" + std::string(kMaxRowsAdvice) + ")");
     }
     if (!lines_.status().ok()) throw ReadError(lines_.status().message());
     return false;
@@ -283,9 +281,10 @@ Recording Assemble(std::string source, const std::vector<Row>& controls,
   ConflictingRepeats control_conflicts(cpath, "line"), pose_conflicts(ppath, "line");
   for (const auto& r : controls) {
     const size_t before = rec.controls.size();
-    rec.controls.Append(to_ns(r.t), r.v);
+    const TimeNs t_ns = to_ns(r.t);
+    rec.controls.Append(t_ns, r.v);
     if (rec.controls.size() == before) ++rec.stats.control_repeated_times;
-    control_conflicts.Add(to_ns(r.t), r.v, r.line);
+    control_conflicts.Add(t_ns, r.v, r.line);
   }
   rec.stats.control_rows = static_cast<int>(controls.size());
   rec.stats.pose_rows = static_cast<int>(poses.size());

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "kincal/control_signal.h"
@@ -62,6 +63,9 @@ struct RecordingLimits {
   int max_rows = kMaxTextLines;  // 5 000 000: 14 h of poses at 100 Hz
   bool IsValid(std::string* why) const;
 };
+// What an error past max_rows adds, in parentheses: why, and how to raise it.
+inline constexpr std::string_view kMaxRowsAdvice =
+    "a recording is held in memory whole; kincal analyze --max-rows raises the bound";
 
 // The index of the run holding time t_ns (0 when the recording is one run).
 int RunOf(const Recording& rec, TimeNs t_ns);
